@@ -1,0 +1,1 @@
+//! Benchmarks for Hearth (criterion); see benches/.

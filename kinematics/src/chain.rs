@@ -1,0 +1,247 @@
+//! Chains: ordered subsets of a model's configuration variables (e.g. Fetch torso + arm).
+
+use rand::Rng;
+
+use crate::error::{KinematicsError, Result};
+use crate::model::{JointKind, RobotModel, sample_interval};
+
+/// An ordered subset of a model's joints, the space that planners and IK work in.
+///
+/// Joints outside the chain keep the values of a full reference configuration
+/// ([`Chain::scatter`] writes chain values into it).
+///
+/// ```
+/// use hearth_kinematics::{Chain, RobotModel};
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// let arm = Chain::named(&fetch, "arm_with_torso").unwrap();
+/// assert_eq!(arm.dof(), 8);
+/// assert_eq!(arm.joint_names()[0], "torso_lift_joint");
+/// ```
+#[derive(Clone, Debug)]
+pub struct Chain {
+    model: RobotModel,
+    name: String,
+    joints: Vec<usize>,
+    variables: Vec<usize>,
+    column_of_variable: Vec<Option<usize>>,
+    names: Vec<String>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    velocity: Vec<f64>,
+    continuous: Vec<bool>,
+    tip: Option<usize>,
+}
+
+impl Chain {
+    /// A chain of the named joints, in the given order.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let c = Chain::new(&panda, &["panda_joint1", "panda_joint2"]).unwrap();
+    /// assert_eq!(c.dof(), 2);
+    /// assert!(Chain::new(&panda, &["panda_joint8"]).is_err()); // fixed joint
+    /// ```
+    pub fn new<S: AsRef<str>>(model: &RobotModel, joints: &[S]) -> Result<Self> {
+        let mut idx = Vec::with_capacity(joints.len());
+        for name in joints {
+            let j = model.joint_index(name.as_ref())?;
+            let joint = &model.joints()[j];
+            if joint.kind == JointKind::Fixed {
+                return Err(KinematicsError::NotAVariable {
+                    name: joint.name.clone(),
+                    why: "fixed",
+                });
+            }
+            if joint.mimic.is_some() {
+                return Err(KinematicsError::NotAVariable {
+                    name: joint.name.clone(),
+                    why: "a mimic joint",
+                });
+            }
+            idx.push(j);
+        }
+        Ok(Self::from_joints(model, "custom", idx, None))
+    }
+
+    /// One of the model's named chains ([`RobotModel::chains`]), with its tip link.
+    pub fn named(model: &RobotModel, name: &str) -> Result<Self> {
+        let spec = model
+            .chains()
+            .iter()
+            .find(|c| c.name == name)
+            .ok_or_else(|| KinematicsError::UnknownJoint {
+                robot: model.name().to_owned(),
+                name: format!("(chain) {name}"),
+            })?;
+        let mut chain = Self::new(model, &spec.joints)?;
+        chain.name = spec.name.clone();
+        chain.tip = Some(model.link_index(&spec.tip)?);
+        Ok(chain)
+    }
+
+    /// Every movable joint between link `base` and link `tip` (which must descend from
+    /// `base`), root side first.
+    pub fn between(model: &RobotModel, base: &str, tip: &str) -> Result<Self> {
+        let b = model.link_index(base)?;
+        let t = model.link_index(tip)?;
+        if !model.is_ancestor(b, t) {
+            return Err(KinematicsError::InvalidTarget(format!(
+                "link `{tip}` does not descend from `{base}`"
+            )));
+        }
+        let joints: Vec<usize> = model
+            .joints_to(t)
+            .into_iter()
+            .filter(|&j| {
+                let joint = &model.joints()[j];
+                joint.variable.is_some() && model.is_ancestor(b, joint.parent)
+            })
+            .collect();
+        let mut chain = Self::from_joints(model, &format!("{base}..{tip}"), joints, Some(t));
+        chain.tip = Some(t);
+        Ok(chain)
+    }
+
+    /// All configuration variables of the model, in `q` order.
+    pub fn all(model: &RobotModel) -> Self {
+        Self::from_joints(model, "all", model.variables().to_vec(), None)
+    }
+
+    fn from_joints(model: &RobotModel, name: &str, joints: Vec<usize>, tip: Option<usize>) -> Self {
+        let variables: Vec<usize> = joints
+            .iter()
+            .map(|&j| model.joints()[j].variable.expect("checked: chain joints are variables"))
+            .collect();
+        let mut column_of_variable = vec![None; model.dof()];
+        for (col, &v) in variables.iter().enumerate() {
+            column_of_variable[v] = Some(col);
+        }
+        Self {
+            model: model.clone(),
+            name: name.to_owned(),
+            names: joints.iter().map(|&j| model.joints()[j].name.clone()).collect(),
+            lower: variables.iter().map(|&v| model.lower()[v]).collect(),
+            upper: variables.iter().map(|&v| model.upper()[v]).collect(),
+            velocity: variables.iter().map(|&v| model.velocity_limits()[v]).collect(),
+            continuous: joints
+                .iter()
+                .map(|&j| model.joints()[j].kind == JointKind::Continuous)
+                .collect(),
+            joints,
+            variables,
+            column_of_variable,
+            tip,
+        }
+    }
+
+    /// The model the chain belongs to.
+    pub fn model(&self) -> &RobotModel {
+        &self.model
+    }
+
+    /// Chain name (`custom` for [`Chain::new`]).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Joint indices in chain order.
+    pub fn joints(&self) -> &[usize] {
+        &self.joints
+    }
+
+    /// Model configuration-variable index of each chain joint.
+    pub fn variables(&self) -> &[usize] {
+        &self.variables
+    }
+
+    /// Chain column of a model variable, if the chain has it.
+    pub fn column_of_variable(&self, variable: usize) -> Option<usize> {
+        self.column_of_variable.get(variable).copied().flatten()
+    }
+
+    /// Joint names in chain order.
+    pub fn joint_names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Lower limits (`-∞` for continuous joints).
+    pub fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+
+    /// Upper limits (`+∞` for continuous joints).
+    pub fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+
+    /// Velocity limits.
+    pub fn velocity_limits(&self) -> &[f64] {
+        &self.velocity
+    }
+
+    /// Which joints are continuous (unbounded).
+    pub fn continuous(&self) -> &[bool] {
+        &self.continuous
+    }
+
+    /// The tip link the chain is solved for, if it has one.
+    pub fn tip(&self) -> Option<usize> {
+        self.tip
+    }
+
+    /// Writes chain values into a full configuration.
+    pub fn scatter(&self, q_chain: &[f64], q_full: &mut [f64]) {
+        for (&v, &x) in self.variables.iter().zip(q_chain) {
+            q_full[v] = x;
+        }
+    }
+
+    /// Reads chain values out of a full configuration.
+    pub fn gather(&self, q_full: &[f64], q_chain: &mut [f64]) {
+        for (x, &v) in q_chain.iter_mut().zip(&self.variables) {
+            *x = q_full[v];
+        }
+    }
+
+    /// Uniform random chain configuration inside the limits (continuous joints in `[-π, π)`).
+    pub fn random_configuration<R: Rng + ?Sized>(&self, rng: &mut R, q: &mut [f64]) {
+        for ((x, &lo), &hi) in q.iter_mut().zip(&self.lower).zip(&self.upper) {
+            *x = sample_interval(rng, lo, hi);
+        }
+    }
+
+    /// Clamps `q` into the limits (continuous joints are wrapped into `(-π, π]`).
+    pub fn clamp(&self, q: &mut [f64]) {
+        for (i, x) in q.iter_mut().enumerate() {
+            if self.continuous[i] {
+                *x = wrap_angle(*x);
+            } else {
+                *x = x.clamp(self.lower[i], self.upper[i]);
+            }
+        }
+    }
+
+    /// Checks the length and finiteness of a chain configuration.
+    pub fn check(&self, q: &[f64]) -> Result<()> {
+        crate::model::check_values("chain configuration", q, &self.names)
+    }
+}
+
+/// Wraps an angle into `(-π, π]`.
+pub fn wrap_angle(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if a > -PI && a <= PI {
+        return a;
+    }
+    let mut r = a.rem_euclid(TAU);
+    if r > PI {
+        r -= TAU;
+    }
+    r
+}

@@ -1,0 +1,306 @@
+//! Forward kinematics: a flat program of joint transforms evaluated in link order.
+//!
+//! The model's links are sorted parents-first, so one pass over [`FkOp`]s fills every link pose.
+//! Each op stores its joint origin and axis by value; evaluating it is one `sin_cos`, two
+//! quaternion products and one rotated vector. Nothing allocates.
+
+use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+
+use crate::error::Result;
+use crate::model::RobotModel;
+
+/// A revolute axis: one of the frame axes (the common case, with a cheaper product) or
+/// any unit vector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Axis {
+    X,
+    Y,
+    Z,
+    General,
+}
+
+impl Axis {
+    pub(crate) fn classify(axis: &Unit<Vector3<f64>>) -> (Axis, f64) {
+        let a = axis.into_inner();
+        for (kind, i) in [(Axis::X, 0), (Axis::Y, 1), (Axis::Z, 2)] {
+            let others = (0..3).filter(|&k| k != i).all(|k| a[k] == 0.0);
+            if others && a[i].abs() == 1.0 {
+                return (kind, a[i]);
+            }
+        }
+        (Axis::General, 1.0)
+    }
+}
+
+/// How an op moves its child.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Motion {
+    Fixed,
+    /// Rotation about a frame axis; `multiplier` already carries the axis sign.
+    RevoluteAxis {
+        axis: Axis,
+        var: u32,
+        multiplier: f64,
+        offset: f64,
+    },
+    Revolute {
+        axis: Unit<Vector3<f64>>,
+        var: u32,
+        multiplier: f64,
+        offset: f64,
+    },
+    Prismatic {
+        axis: Unit<Vector3<f64>>,
+        var: u32,
+        multiplier: f64,
+        offset: f64,
+    },
+}
+
+/// One step of the program: `pose[child] = pose[parent] · origin · motion(q)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FkOp {
+    pub(crate) parent: u32,
+    pub(crate) child: u32,
+    pub(crate) origin: Isometry3<f64>,
+    pub(crate) motion: Motion,
+}
+
+impl FkOp {
+    /// The child's pose relative to its parent link for configuration `q`.
+    #[inline(always)]
+    pub(crate) fn local(&self, q: &[f64]) -> Isometry3<f64> {
+        match self.motion {
+            Motion::Fixed => self.origin,
+            Motion::RevoluteAxis {
+                axis,
+                var,
+                multiplier,
+                offset,
+            } => {
+                let half = 0.5 * (multiplier * q[var as usize] + offset);
+                let (s, c) = sin_cos(half);
+                let o = self.origin.rotation.quaternion();
+                let (w, x, y, z) = (o.w, o.i, o.j, o.k);
+                // o · (c + s·e), with e the unit axis quaternion: 8 products instead of 16.
+                let r = match axis {
+                    Axis::X => Quaternion::new(w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s),
+                    Axis::Y => Quaternion::new(w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s),
+                    _ => Quaternion::new(w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s),
+                };
+                Isometry3::from_parts(self.origin.translation, UnitQuaternion::new_unchecked(r))
+            }
+            Motion::Revolute {
+                axis,
+                var,
+                multiplier,
+                offset,
+            } => {
+                let half = 0.5 * (multiplier * q[var as usize] + offset);
+                let (s, c) = sin_cos(half);
+                let rot = UnitQuaternion::new_unchecked(Quaternion::from_parts(c, axis.into_inner() * s));
+                Isometry3::from_parts(self.origin.translation, self.origin.rotation * rot)
+            }
+            Motion::Prismatic {
+                axis,
+                var,
+                multiplier,
+                offset,
+            } => {
+                let d = multiplier * q[var as usize] + offset;
+                let t = self.origin.translation.vector + self.origin.rotation * (axis.into_inner() * d);
+                Isometry3::from_parts(Translation3::from(t), self.origin.rotation)
+            }
+        }
+    }
+}
+
+/// The compiled forward-kinematics program of a model: `ops[i]` computes link `i + 1`.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FkProgram {
+    pub(crate) ops: Vec<FkOp>,
+}
+
+impl FkProgram {
+    /// Runs every op: `poses[0]` must hold the root pose.
+    #[inline]
+    pub(crate) fn run(&self, q: &[f64], poses: &mut [Isometry3<f64>]) {
+        // Serial chains dominate: keep the last pose in registers instead of reloading it.
+        let mut prev_child = 0u32;
+        let mut prev = poses[0];
+        for op in &self.ops {
+            let parent = if op.parent == prev_child {
+                prev
+            } else {
+                poses[op.parent as usize]
+            };
+            let pose = parent * op.local(q);
+            poses[op.child as usize] = pose;
+            prev = pose;
+            prev_child = op.child;
+        }
+    }
+
+    /// Runs only the ops listed (each op's parent must already be computed).
+    #[inline]
+    pub(crate) fn run_subset(&self, subset: &[u32], q: &[f64], poses: &mut [Isometry3<f64>]) {
+        for &i in subset {
+            let op = &self.ops[i as usize];
+            let parent = poses[op.parent as usize];
+            poses[op.child as usize] = parent * op.local(q);
+        }
+    }
+}
+
+impl RobotModel {
+    /// Forward kinematics: writes the world pose of every link into `poses`, with the root at
+    /// the origin. `poses` must have one entry per link ([`RobotModel::pose_buffer`]).
+    ///
+    /// Does not allocate. Errors on a wrong length or a non-finite value.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let mut poses = panda.pose_buffer();
+    /// let half_pi = std::f64::consts::FRAC_PI_2;
+    /// let q = vec![0.0, 0.0, 0.0, -half_pi, 0.0, half_pi, 0.0, 0.0];
+    /// panda.fk(&q, &mut poses).unwrap();
+    /// let flange = &poses[panda.link_index("panda_link8").unwrap()];
+    /// assert!((flange.translation.x - (0.0825 + 0.384 + 0.088)).abs() < 1e-9);
+    /// assert!((flange.translation.z - (0.333 + 0.316 + 0.0825 - 0.107)).abs() < 1e-9);
+    /// ```
+    pub fn fk(&self, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
+        self.fk_from(&Isometry3::identity(), q, poses)
+    }
+
+    /// Like [`RobotModel::fk`] with the root link placed at `base` (e.g. a mobile base pose).
+    pub fn fk_from(&self, base: &Isometry3<f64>, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
+        self.check_configuration(q)?;
+        if poses.len() != self.0.links.len() {
+            return Err(crate::KinematicsError::DimensionMismatch {
+                what: "pose buffer",
+                expected: self.0.links.len(),
+                got: poses.len(),
+            });
+        }
+        poses[0] = *base;
+        self.0.fk.run(q, poses);
+        Ok(())
+    }
+
+    /// Forward kinematics to one link: its world pose (root at the origin).
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let link0 = panda.link_index("panda_link1").unwrap();
+    /// let pose = panda.link_pose(&panda.neutral_configuration(), link0).unwrap();
+    /// assert!((pose.translation.z - 0.333).abs() < 1e-9);
+    /// ```
+    pub fn link_pose(&self, q: &[f64], link: usize) -> Result<Isometry3<f64>> {
+        self.check_configuration(q)?;
+        if link >= self.0.links.len() {
+            return Err(crate::KinematicsError::DimensionMismatch {
+                what: "link index",
+                expected: self.0.links.len(),
+                got: link,
+            });
+        }
+        let mut pose = Isometry3::identity();
+        let mut path = [0u32; 64];
+        let mut n = 0;
+        let mut cur = link;
+        while cur != 0 && n < path.len() {
+            path[n] = (cur - 1) as u32;
+            n += 1;
+            cur = self.0.fk.ops[cur - 1].parent as usize;
+        }
+        if cur != 0 {
+            // Deeper than 64 links: fall back to a full pass.
+            let mut poses = self.pose_buffer();
+            self.0.fk.run(q, &mut poses);
+            return Ok(poses[link]);
+        }
+        for &i in path[..n].iter().rev() {
+            pose *= self.0.fk.ops[i as usize].local(q);
+        }
+        Ok(pose)
+    }
+
+    /// The op indices that compute the links from the root to `link`, in evaluation order.
+    pub(crate) fn fk_path(&self, link: usize) -> Vec<u32> {
+        let mut path = Vec::new();
+        let mut cur = link;
+        while cur != 0 {
+            path.push((cur - 1) as u32);
+            cur = self.0.fk.ops[cur - 1].parent as usize;
+        }
+        path.reverse();
+        path
+    }
+}
+
+/// `(sin x, cos x)` to within a few ulps for |x| ≲ 1e5: Cody–Waite reduction to
+/// [−π/4, π/4] and Taylor polynomials (error < 1e-17 there). Inlined, unlike libm's `sincos`,
+/// so the FK loop overlaps it with the previous link's products.
+#[inline(always)]
+pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() >= 1e5 || x.is_nan() {
+        return x.sin_cos();
+    }
+    // π/2 split so that k·PIO2_HI is exact for |k| < 2^20 (PIO2_HI has 33 significant bits).
+    const PIO2_HI: f64 = 1.570_796_326_734_125_6;
+    const PIO2_LO: f64 = 6.077_100_506_506_192e-11;
+    // Round to nearest without a libm call: adding 1.5·2^52 drops the fraction bits.
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    let k = (x * std::f64::consts::FRAC_2_PI + SHIFT) - SHIFT;
+    let r = (x - k * PIO2_HI) - k * PIO2_LO;
+    let r2 = r * r;
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0
+                        + r2 * (1.0 / 362_880.0
+                            + r2 * (-1.0 / 39_916_800.0
+                                + r2 * (1.0 / 6_227_020_800.0 + r2 * (-1.0 / 1_307_674_368_000.0))))))));
+    let c = 1.0
+        + r2 * (-0.5
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0
+                            + r2 * (1.0 / 479_001_600.0
+                                + r2 * (-1.0 / 87_178_291_200.0 + r2 / 20_922_789_888_000.0)))))));
+    match (k as i64) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sin_cos;
+
+    #[test]
+    fn sin_cos_matches_libm() {
+        let mut x = -50.0;
+        while x < 50.0 {
+            let (s, c) = sin_cos(x);
+            assert!(
+                (s - x.sin()).abs() < 1e-15 && (c - x.cos()).abs() < 1e-15,
+                "{x}: {} {}",
+                s - x.sin(),
+                c - x.cos()
+            );
+            x += 0.000_731;
+        }
+        for x in [0.0, 1e-300, -0.0, 1e5 - 1.0, 1e6, f64::NAN, f64::INFINITY] {
+            let (s, c) = sin_cos(x);
+            assert!((s - x.sin()).abs() < 1e-12 || (s.is_nan() && x.sin().is_nan()), "{x}");
+            assert!((c - x.cos()).abs() < 1e-12 || (c.is_nan() && x.cos().is_nan()), "{x}");
+        }
+    }
+}

@@ -1,0 +1,498 @@
+//! The immutable robot description: links, joints, limits, geometry.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Matrix3, Unit, Vector3};
+use parry3d::shape::SharedShape;
+use rand::{Rng, RngExt};
+
+use crate::error::{KinematicsError, Result};
+use crate::fk::FkProgram;
+
+/// How a joint moves its child link relative to its parent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKind {
+    /// Rotation about the axis, within position limits.
+    Revolute,
+    /// Rotation about the axis without position limits.
+    Continuous,
+    /// Translation along the axis, within position limits.
+    Prismatic,
+    /// No motion.
+    Fixed,
+}
+
+impl JointKind {
+    /// The URDF spelling of this kind.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+            JointKind::Fixed => "fixed",
+        }
+    }
+
+    /// Whether the joint moves at all.
+    pub fn is_movable(self) -> bool {
+        self != JointKind::Fixed
+    }
+}
+
+/// Position, velocity and effort limits of one joint.
+///
+/// Continuous joints have `lower = -∞`, `upper = +∞`. A velocity or effort written as 0 (or
+/// absent) in the URDF means "unspecified" and is stored as `+∞`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct JointLimits {
+    /// Lower position limit (rad or m).
+    pub lower: f64,
+    /// Upper position limit (rad or m).
+    pub upper: f64,
+    /// Velocity limit (rad/s or m/s).
+    pub velocity: f64,
+    /// Effort limit (N·m or N).
+    pub effort: f64,
+}
+
+/// `q_this = multiplier · q_target + offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mimic {
+    /// Index of the joint followed (always an independent variable, chains resolved at load).
+    pub joint: usize,
+    /// Multiplier.
+    pub multiplier: f64,
+    /// Offset.
+    pub offset: f64,
+}
+
+/// Joint damping and friction (used by the simulator).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Dynamics {
+    /// Viscous damping.
+    pub damping: f64,
+    /// Coulomb friction.
+    pub friction: f64,
+}
+
+/// One joint of the tree.
+#[derive(Clone, Debug)]
+pub struct Joint {
+    /// Joint name.
+    pub name: String,
+    /// How it moves.
+    pub kind: JointKind,
+    /// Parent link index.
+    pub parent: usize,
+    /// Child link index.
+    pub child: usize,
+    /// Pose of the joint frame (= child link frame at zero) in the parent link frame.
+    pub origin: Isometry3<f64>,
+    /// Unit axis in the joint frame.
+    pub axis: Unit<Vector3<f64>>,
+    /// Limits (meaningless for fixed joints).
+    pub limits: JointLimits,
+    /// Set when this joint follows another one.
+    pub mimic: Option<Mimic>,
+    /// Damping and friction, if the URDF gives them.
+    pub dynamics: Option<Dynamics>,
+    /// Index into the configuration vector, for movable joints that do not mimic.
+    pub variable: Option<usize>,
+}
+
+/// Mass properties of a link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inertial {
+    /// Centre-of-mass frame in the link frame.
+    pub origin: Isometry3<f64>,
+    /// Mass in kg.
+    pub mass: f64,
+    /// Inertia tensor about the centre of mass, in the `origin` frame (kg·m²).
+    pub inertia: Matrix3<f64>,
+}
+
+/// A triangle mesh, already scaled, in the geometry's frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub vertices: Vec<[f32; 3]>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A geometric primitive or mesh as the URDF describes it.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// A box with these half extents.
+    Box {
+        /// Half extents along x, y, z.
+        half_extents: Vector3<f64>,
+    },
+    /// A cylinder along the local z axis.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Full length.
+        length: f64,
+    },
+    /// A capsule along the local z axis (cylinder length, without caps).
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// Length of the cylindrical part.
+        length: f64,
+    },
+    /// A sphere.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A mesh file.
+    Mesh {
+        /// The `filename` attribute as written.
+        uri: String,
+        /// The scale applied.
+        scale: Vector3<f64>,
+        /// The loaded, scaled triangles.
+        mesh: Arc<TriangleMesh>,
+    },
+}
+
+/// A visual element of a link.
+#[derive(Clone, Debug)]
+pub struct Visual {
+    /// Optional name.
+    pub name: Option<String>,
+    /// Pose in the link frame.
+    pub origin: Isometry3<f64>,
+    /// Shape.
+    pub geometry: Geometry,
+    /// Material name (e.g. `metal_white`), if any.
+    pub material: Option<String>,
+    /// RGBA colour, if given.
+    pub rgba: Option<[f64; 4]>,
+}
+
+/// A collision element of a link, with its parry shape.
+#[derive(Clone)]
+pub struct Collision {
+    /// Optional name.
+    pub name: Option<String>,
+    /// Pose in the link frame, as the URDF writes it.
+    pub origin: Isometry3<f64>,
+    /// The shape as described.
+    pub geometry: Geometry,
+    /// The parry shape (meshes become convex hulls or decompositions).
+    pub shape: SharedShape,
+    /// Pose of `shape` in the link frame (differs from `origin` for cylinders and capsules,
+    /// whose parry axis is y while URDF's is z).
+    pub shape_origin: Isometry3<f64>,
+}
+
+impl std::fmt::Debug for Collision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Collision")
+            .field("name", &self.name)
+            .field("origin", &self.origin)
+            .field("geometry", &self.geometry)
+            .finish_non_exhaustive()
+    }
+}
+
+/// One link of the tree.
+#[derive(Clone, Debug)]
+pub struct Link {
+    /// Link name.
+    pub name: String,
+    /// The joint whose child this link is (`None` for the root).
+    pub parent_joint: Option<usize>,
+    /// Mass properties, if given.
+    pub inertial: Option<Inertial>,
+    /// Visual elements.
+    pub visuals: Vec<Visual>,
+    /// Collision elements.
+    pub collisions: Vec<Collision>,
+}
+
+/// A link's collision geometry as one parry shape, in the link frame.
+#[derive(Clone)]
+pub struct LinkShape {
+    /// The shape (a compound when the link has several collision elements).
+    pub shape: SharedShape,
+    /// Pose of the shape in the link frame.
+    pub origin: Isometry3<f64>,
+}
+
+/// A named ordered subset of joints defined with a model (e.g. Fetch's `arm`).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct ChainSpec {
+    /// Chain name.
+    pub name: String,
+    /// Joint names in order.
+    pub joints: Vec<String>,
+    /// The end-effector link the chain is usually solved for.
+    pub tip: String,
+}
+
+pub(crate) struct ModelData {
+    pub(crate) name: String,
+    pub(crate) source_name: String,
+    pub(crate) links: Vec<Link>,
+    pub(crate) joints: Vec<Joint>,
+    pub(crate) root: usize,
+    pub(crate) variables: Vec<usize>,
+    pub(crate) variable_names: Vec<String>,
+    pub(crate) lower: Vec<f64>,
+    pub(crate) upper: Vec<f64>,
+    pub(crate) velocity: Vec<f64>,
+    pub(crate) effort: Vec<f64>,
+    pub(crate) link_by_name: HashMap<String, usize>,
+    pub(crate) joint_by_name: HashMap<String, usize>,
+    pub(crate) link_shapes: Vec<Option<LinkShape>>,
+    pub(crate) chains: Vec<ChainSpec>,
+    pub(crate) fk: FkProgram,
+    pub(crate) fingerprint: u64,
+}
+
+/// An immutable robot description: a tree of links connected by joints, with limits and
+/// collision geometry.
+///
+/// Cloning is cheap (one reference count); a model can be shared across threads.
+/// The configuration vector `q` lists the **movable joints that do not mimic another**, in the
+/// order they appear in the URDF ([`RobotModel::variable_names`]).
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// assert_eq!(panda.dof(), 8); // 7 arm joints + 1 finger (the second finger mimics)
+/// let mut poses = panda.pose_buffer();
+/// panda.fk(&panda.neutral_configuration(), &mut poses).unwrap();
+/// let hand = panda.link_index("panda_hand").unwrap();
+/// assert!(poses[hand].translation.z > 0.5);
+/// ```
+#[derive(Clone)]
+pub struct RobotModel(pub(crate) Arc<ModelData>);
+
+impl std::fmt::Debug for RobotModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RobotModel")
+            .field("name", &self.0.name)
+            .field("links", &self.0.links.len())
+            .field("dof", &self.0.variables.len())
+            .finish()
+    }
+}
+
+impl RobotModel {
+    /// Robot name (the URDF's `<robot name>`).
+    pub fn name(&self) -> &str {
+        &self.0.name
+    }
+
+    /// Where the model came from (file path, `builtin:NAME` or `<string>`).
+    pub fn source_name(&self) -> &str {
+        &self.0.source_name
+    }
+
+    /// All links, parents before children (index 0 is the root).
+    pub fn links(&self) -> &[Link] {
+        &self.0.links
+    }
+
+    /// All joints, in URDF order.
+    pub fn joints(&self) -> &[Joint] {
+        &self.0.joints
+    }
+
+    /// Index of the root link.
+    pub fn root(&self) -> usize {
+        self.0.root
+    }
+
+    /// Number of configuration variables.
+    pub fn dof(&self) -> usize {
+        self.0.variables.len()
+    }
+
+    /// Joint index of each configuration variable.
+    pub fn variables(&self) -> &[usize] {
+        &self.0.variables
+    }
+
+    /// Joint name of each configuration variable, in `q` order.
+    pub fn variable_names(&self) -> &[String] {
+        &self.0.variable_names
+    }
+
+    /// Lower position limit per variable (`-∞` for continuous joints).
+    pub fn lower(&self) -> &[f64] {
+        &self.0.lower
+    }
+
+    /// Upper position limit per variable (`+∞` for continuous joints).
+    pub fn upper(&self) -> &[f64] {
+        &self.0.upper
+    }
+
+    /// Velocity limit per variable.
+    pub fn velocity_limits(&self) -> &[f64] {
+        &self.0.velocity
+    }
+
+    /// Effort limit per variable.
+    pub fn effort_limits(&self) -> &[f64] {
+        &self.0.effort
+    }
+
+    /// Named chains that come with the model (built-in robots define them).
+    pub fn chains(&self) -> &[ChainSpec] {
+        &self.0.chains
+    }
+
+    /// A hash of everything that affects kinematics and collision geometry.
+    pub fn fingerprint(&self) -> u64 {
+        self.0.fingerprint
+    }
+
+    /// Index of a link by name.
+    pub fn link_index(&self, name: &str) -> Result<usize> {
+        self.0
+            .link_by_name
+            .get(name)
+            .copied()
+            .ok_or_else(|| KinematicsError::UnknownLink {
+                robot: self.0.name.clone(),
+                name: name.to_owned(),
+            })
+    }
+
+    /// Index of a joint by name.
+    pub fn joint_index(&self, name: &str) -> Result<usize> {
+        self.0
+            .joint_by_name
+            .get(name)
+            .copied()
+            .ok_or_else(|| KinematicsError::UnknownJoint {
+                robot: self.0.name.clone(),
+                name: name.to_owned(),
+            })
+    }
+
+    /// The link's collision geometry merged into one shape, or `None` if it has none.
+    pub fn link_shape(&self, link: usize) -> Option<&LinkShape> {
+        self.0.link_shapes.get(link).and_then(Option::as_ref)
+    }
+
+    /// A buffer with one identity pose per link, for [`RobotModel::fk`].
+    pub fn pose_buffer(&self) -> Vec<Isometry3<f64>> {
+        vec![Isometry3::identity(); self.0.links.len()]
+    }
+
+    /// A configuration at zero, moved inside the limits where zero is outside them.
+    pub fn neutral_configuration(&self) -> Vec<f64> {
+        self.0
+            .lower
+            .iter()
+            .zip(&self.0.upper)
+            .map(|(&lo, &hi)| 0.0f64.clamp(lo, hi))
+            .collect()
+    }
+
+    /// Fills `q` with a configuration drawn uniformly inside the limits (continuous joints
+    /// in `[-π, π)`).
+    pub fn random_configuration<R: Rng + ?Sized>(&self, rng: &mut R, q: &mut [f64]) {
+        for ((qi, &lo), &hi) in q.iter_mut().zip(&self.0.lower).zip(&self.0.upper) {
+            *qi = sample_interval(rng, lo, hi);
+        }
+    }
+
+    /// Checks that `q` has the right length and only finite values.
+    pub fn check_configuration(&self, q: &[f64]) -> Result<()> {
+        check_values("configuration", q, &self.0.variable_names)
+    }
+
+    /// Whether every value of `q` lies within its limits (plus `tolerance`).
+    pub fn within_limits(&self, q: &[f64], tolerance: f64) -> bool {
+        q.len() == self.dof()
+            && q.iter()
+                .zip(&self.0.lower)
+                .zip(&self.0.upper)
+                .all(|((&v, &lo), &hi)| v >= lo - tolerance && v <= hi + tolerance)
+    }
+
+    /// Position of joint `j` for configuration `q` (mimic joints follow their target).
+    pub fn joint_position(&self, q: &[f64], j: usize) -> f64 {
+        let joint = &self.0.joints[j];
+        match (joint.variable, joint.mimic) {
+            (Some(v), _) => q[v],
+            (None, Some(m)) => {
+                let v = self.0.joints[m.joint].variable.unwrap_or(0);
+                m.multiplier * q[v] + m.offset
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The joints from the root down to `link`, root first.
+    pub fn joints_to(&self, link: usize) -> Vec<usize> {
+        let mut path = Vec::new();
+        let mut cur = link;
+        while let Some(j) = self.0.links[cur].parent_joint {
+            path.push(j);
+            cur = self.0.joints[j].parent;
+        }
+        path.reverse();
+        path
+    }
+
+    /// Whether link `ancestor` lies on the path from the root to `link` (or is `link`).
+    pub fn is_ancestor(&self, ancestor: usize, link: usize) -> bool {
+        let mut cur = link;
+        loop {
+            if cur == ancestor {
+                return true;
+            }
+            match self.0.links[cur].parent_joint {
+                Some(j) => cur = self.0.joints[j].parent,
+                None => return false,
+            }
+        }
+    }
+}
+
+/// Uniform sample in `[lo, hi]`; `[-π, π)` when the interval is unbounded.
+pub(crate) fn sample_interval<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    let (lo, hi) = if lo.is_finite() && hi.is_finite() {
+        (lo, hi)
+    } else {
+        (-std::f64::consts::PI, std::f64::consts::PI)
+    };
+    if hi > lo {
+        lo + (hi - lo) * rng.random::<f64>()
+    } else {
+        lo
+    }
+}
+
+pub(crate) fn check_values(what: &'static str, q: &[f64], names: &[String]) -> Result<()> {
+    if q.len() != names.len() {
+        return Err(KinematicsError::DimensionMismatch {
+            what,
+            expected: names.len(),
+            got: q.len(),
+        });
+    }
+    for (index, (&value, name)) in q.iter().zip(names).enumerate() {
+        if !value.is_finite() {
+            return Err(KinematicsError::NonFinite {
+                what,
+                index,
+                name: name.clone(),
+                value,
+            });
+        }
+    }
+    Ok(())
+}

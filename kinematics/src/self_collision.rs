@@ -1,0 +1,321 @@
+//! The self-collision matrix: which link pairs need checking at all.
+//!
+//! As MoveIt's setup assistant does, a pair is disabled when the links are adjacent in the
+//! tree (or joined only through links without geometry), collide in the neutral
+//! configuration, collide in nearly every sampled configuration (`always`), or never collide
+//! in any of N sampled configurations (`never`). Computed once and cacheable to a JSON file
+//! that records the model's fingerprint, so a stale cache is refused.
+
+use std::path::Path;
+
+use nalgebra::Isometry3;
+use rand::SeedableRng;
+
+use crate::convert::to_pose;
+use crate::error::{KinematicsError, Result};
+use crate::model::RobotModel;
+
+/// Why a pair is not checked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DisabledReason {
+    /// Joined by a joint (or through links without geometry).
+    Adjacent,
+    /// In collision in the neutral configuration.
+    Default,
+    /// In collision in (nearly) every sample.
+    Always,
+    /// Never in collision in any sample.
+    Never,
+}
+
+/// Settings for [`SelfCollisionMatrix::compute`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SelfCollisionSettings {
+    /// Random configurations sampled.
+    pub samples: usize,
+    /// A pair colliding in at least this fraction of samples is `always` disabled.
+    pub always_fraction: f64,
+    /// RNG seed (the matrix is a pure function of model, settings and seed).
+    pub seed: u64,
+}
+
+impl Default for SelfCollisionSettings {
+    fn default() -> Self {
+        Self {
+            samples: 10_000,
+            always_fraction: 0.95,
+            seed: 0,
+        }
+    }
+}
+
+/// Link pairs to check for self-collision, and why the others are skipped.
+///
+/// ```
+/// use hearth_kinematics::{RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let m = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 200, ..Default::default() });
+/// let l0 = panda.link_index("panda_link0").unwrap();
+/// let l1 = panda.link_index("panda_link1").unwrap();
+/// assert!(m.is_disabled(l0, l1)); // adjacent
+/// let mut poses = panda.pose_buffer();
+/// panda.fk(&panda.neutral_configuration(), &mut poses).unwrap();
+/// assert_eq!(m.first_collision(&panda, &poses), None);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelfCollisionMatrix {
+    fingerprint: u64,
+    n: usize,
+    disabled: Vec<Option<DisabledReason>>,
+    checked: Vec<(usize, usize)>,
+    names: Vec<String>,
+}
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CacheFile {
+    robot: String,
+    fingerprint: String,
+    settings: SelfCollisionSettings,
+    disabled: Vec<(String, String, DisabledReason)>,
+}
+
+impl SelfCollisionMatrix {
+    /// Only adjacent pairs disabled (no sampling).
+    pub fn adjacent_only(model: &RobotModel) -> Self {
+        let mut m = Self::empty(model);
+        m.mark_adjacent(model);
+        m.finish();
+        m
+    }
+
+    /// Computes the matrix by sampling (deterministic for given settings).
+    pub fn compute(model: &RobotModel, settings: &SelfCollisionSettings) -> Self {
+        let mut m = Self::empty(model);
+        m.mark_adjacent(model);
+        let geo: Vec<usize> = (0..m.n).filter(|&l| model.link_shape(l).is_some()).collect();
+        let mut poses = model.pose_buffer();
+        let pairs: Vec<(usize, usize)> = geo
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &a)| geo[i + 1..].iter().map(move |&b| (a, b)))
+            .filter(|&(a, b)| m.disabled[a * m.n + b].is_none())
+            .collect();
+        // Neutral configuration.
+        let q0 = model.neutral_configuration();
+        if model.fk(&q0, &mut poses).is_ok() {
+            for &(a, b) in &pairs {
+                if links_touch(model, &poses, a, b) {
+                    m.set(a, b, DisabledReason::Default);
+                }
+            }
+        }
+        let pairs: Vec<(usize, usize)> = pairs
+            .into_iter()
+            .filter(|&(a, b)| m.disabled[a * m.n + b].is_none())
+            .collect();
+        let mut hits = vec![0usize; pairs.len()];
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(settings.seed);
+        let mut q = q0;
+        for _ in 0..settings.samples {
+            model.random_configuration(&mut rng, &mut q);
+            if model.fk(&q, &mut poses).is_err() {
+                continue;
+            }
+            for (k, &(a, b)) in pairs.iter().enumerate() {
+                if links_touch(model, &poses, a, b) {
+                    hits[k] += 1;
+                }
+            }
+        }
+        for (k, &(a, b)) in pairs.iter().enumerate() {
+            if hits[k] == 0 {
+                m.set(a, b, DisabledReason::Never);
+            } else if hits[k] as f64 >= settings.always_fraction * settings.samples as f64 {
+                m.set(a, b, DisabledReason::Always);
+            }
+        }
+        m.finish();
+        m
+    }
+
+    fn empty(model: &RobotModel) -> Self {
+        let n = model.links().len();
+        Self {
+            fingerprint: model.fingerprint(),
+            n,
+            disabled: vec![None; n * n],
+            checked: Vec::new(),
+            names: model.links().iter().map(|l| l.name.clone()).collect(),
+        }
+    }
+
+    fn set(&mut self, a: usize, b: usize, why: DisabledReason) {
+        self.disabled[a * self.n + b] = Some(why);
+        self.disabled[b * self.n + a] = Some(why);
+    }
+
+    fn mark_adjacent(&mut self, model: &RobotModel) {
+        // Nearest ancestor that has geometry, for every link.
+        for l in 0..self.n {
+            let mut cur = l;
+            while let Some(j) = model.links()[cur].parent_joint {
+                let p = model.joints()[j].parent;
+                if cur == l || model.link_shape(cur).is_none() {
+                    self.set(l, p, DisabledReason::Adjacent);
+                }
+                if model.link_shape(p).is_some() {
+                    break;
+                }
+                cur = p;
+            }
+        }
+        // Links whose only connection runs through geometry-free links are adjacent, too:
+        // siblings hanging off the same geometry-free parent.
+        for j in model.joints() {
+            if model.link_shape(j.parent).is_none() {
+                for k in model.joints() {
+                    if k.parent == j.parent && k.child != j.child {
+                        self.set(j.child, k.child, DisabledReason::Adjacent);
+                    }
+                }
+            }
+        }
+    }
+
+    fn finish(&mut self) {
+        self.checked.clear();
+        for a in 0..self.n {
+            for b in a + 1..self.n {
+                if self.disabled[a * self.n + b].is_none() {
+                    self.checked.push((a, b));
+                }
+            }
+        }
+    }
+
+    /// Whether the pair is skipped.
+    pub fn is_disabled(&self, a: usize, b: usize) -> bool {
+        a == b || self.disabled.get(a * self.n + b).is_some_and(Option::is_some)
+    }
+
+    /// Why the pair is skipped, if it is.
+    pub fn reason(&self, a: usize, b: usize) -> Option<DisabledReason> {
+        self.disabled.get(a * self.n + b).copied().flatten()
+    }
+
+    /// Pairs that need checking (both links have geometry), `a < b`.
+    pub fn checked_pairs(&self) -> Vec<(usize, usize)> {
+        self.checked.clone()
+    }
+
+    /// Pairs that need checking, restricted to links with geometry in `model`.
+    pub fn checked_geometric_pairs(&self, model: &RobotModel) -> Vec<(usize, usize)> {
+        self.checked
+            .iter()
+            .copied()
+            .filter(|&(a, b)| model.link_shape(a).is_some() && model.link_shape(b).is_some())
+            .collect()
+    }
+
+    /// Marks a pair as never checked (e.g. from a benchmark's allowed-collision list).
+    pub fn disable(&mut self, a: usize, b: usize, why: DisabledReason) {
+        if a < self.n && b < self.n && a != b {
+            self.set(a, b, why);
+            self.finish();
+        }
+    }
+
+    /// The first checked pair in collision for these link poses, if any.
+    pub fn first_collision(&self, model: &RobotModel, poses: &[Isometry3<f64>]) -> Option<(usize, usize)> {
+        self.checked
+            .iter()
+            .copied()
+            .find(|&(a, b)| links_touch(model, poses, a, b))
+    }
+
+    /// Writes the matrix as JSON.
+    pub fn to_json(&self, model: &RobotModel, settings: &SelfCollisionSettings) -> String {
+        let mut disabled = Vec::new();
+        for a in 0..self.n {
+            for b in a + 1..self.n {
+                if let Some(why) = self.disabled[a * self.n + b] {
+                    disabled.push((self.names[a].clone(), self.names[b].clone(), why));
+                }
+            }
+        }
+        let file = CacheFile {
+            robot: model.name().to_owned(),
+            fingerprint: format!("{:016x}", self.fingerprint),
+            settings: settings.clone(),
+            disabled,
+        };
+        serde_json::to_string_pretty(&file).unwrap_or_default()
+    }
+
+    /// Reads a matrix written by [`SelfCollisionMatrix::to_json`], refusing one computed for
+    /// a different model.
+    pub fn from_json(text: &str, model: &RobotModel, source_name: &str) -> Result<Self> {
+        let file: CacheFile = serde_json::from_str(text).map_err(|e| KinematicsError::BadCache {
+            source_name: source_name.to_owned(),
+            message: e.to_string(),
+        })?;
+        let expected = format!("{:016x}", model.fingerprint());
+        if file.fingerprint != expected {
+            return Err(KinematicsError::StaleCache {
+                source_name: source_name.to_owned(),
+                found: file.fingerprint,
+                expected,
+            });
+        }
+        let mut m = Self::empty(model);
+        for (a, b, why) in file.disabled {
+            let a = model.link_index(&a)?;
+            let b = model.link_index(&b)?;
+            m.set(a, b, why);
+        }
+        m.finish();
+        Ok(m)
+    }
+
+    /// Saves to a file.
+    pub fn save(&self, path: &Path, model: &RobotModel, settings: &SelfCollisionSettings) -> Result<()> {
+        std::fs::write(path, self.to_json(model, settings)).map_err(|error| KinematicsError::Io {
+            path: path.to_path_buf(),
+            error,
+        })
+    }
+
+    /// Loads from a file.
+    pub fn load(path: &Path, model: &RobotModel) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|error| KinematicsError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Self::from_json(&text, model, &path.display().to_string())
+    }
+
+    /// Loads from `path` if it holds a matrix for this model, otherwise computes one and
+    /// writes it there.
+    pub fn load_or_compute(path: &Path, model: &RobotModel, settings: &SelfCollisionSettings) -> Result<Self> {
+        if let Ok(m) = Self::load(path, model) {
+            return Ok(m);
+        }
+        let m = Self::compute(model, settings);
+        m.save(path, model, settings)?;
+        Ok(m)
+    }
+}
+
+/// Whether the collision shapes of links `a` and `b` intersect at these poses.
+pub fn links_touch(model: &RobotModel, poses: &[Isometry3<f64>], a: usize, b: usize) -> bool {
+    let (Some(sa), Some(sb)) = (model.link_shape(a), model.link_shape(b)) else {
+        return false;
+    };
+    let pa = to_pose(&(poses[a] * sa.origin));
+    let pb = to_pose(&(poses[b] * sb.origin));
+    parry3d::query::intersection_test(&pa, sa.shape.as_ref(), &pb, sb.shape.as_ref())
+        .map(|r| r.intersecting)
+        .unwrap_or(false)
+}

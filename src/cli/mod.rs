@@ -1,0 +1,52 @@
+//! Command-line interface definitions and dispatch.
+
+mod bench;
+mod demo;
+mod kin;
+
+use clap::{Parser, Subcommand};
+
+/// Hearth: motion planning and mobile manipulation with a physics-simulator backend.
+#[derive(Parser, Debug)]
+#[command(name = "hearth", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the main job on the embedded defaults and print a short report.
+    Demo(demo::DemoArgs),
+    /// Inspect robot models: links, joints, forward and inverse kinematics.
+    #[command(subcommand)]
+    Kin(kin::KinCommand),
+    /// Measure speed.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// Runs one parsed command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Kin(c) => kin::run(c),
+        Command::Bench(c) => bench::run(c),
+    }
+}
+
+/// Parses `"a,b,c"` into numbers, naming the bad item.
+pub(crate) fn parse_list(text: &str, what: &str) -> anyhow::Result<Vec<f64>> {
+    let text = text.trim();
+    if text.is_empty() {
+        return Ok(Vec::new());
+    }
+    text.split(',')
+        .enumerate()
+        .map(|(i, s)| {
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| anyhow::anyhow!("{what}: item {i} `{}` is not a number", s.trim()))
+        })
+        .collect()
+}

@@ -1,0 +1,393 @@
+//! The `hearth` binary end to end: `kin info`, `kin fk`, `kin ik`, `bench kin`, and the errors a
+//! user meets (bad `--q`, unknown robot, missing or malformed URDF), which must exit non-zero
+//! with a message and never a panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn hearth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hearth"))
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run hearth {args:?}: {e}"))
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs `hearth args`, which must succeed, and parses its stdout as JSON.
+#[track_caller]
+fn json_ok(args: &[&str]) -> Value {
+    let o = hearth(args);
+    assert!(
+        o.status.success(),
+        "hearth {args:?} failed ({}):\n{}",
+        o.status,
+        stderr(&o)
+    );
+    serde_json::from_str(&stdout(&o))
+        .unwrap_or_else(|e| panic!("hearth {args:?}: stdout is not JSON ({e}):\n{}", stdout(&o)))
+}
+
+/// Runs `hearth args`, which must fail cleanly; returns its stderr.
+#[track_caller]
+fn fails(args: &[&str]) -> String {
+    let o = hearth(args);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "hearth {args:?} should fail, but exited 0:\n{}",
+        stdout(&o)
+    );
+    assert!(!err.contains("panicked"), "hearth {args:?} panicked:\n{err}");
+    assert_ne!(o.status.code(), Some(101), "exit code 101 is a Rust panic: {err}");
+    assert!(o.status.code().is_some(), "killed by a signal: {:?}", o.status);
+    assert!(!err.trim().is_empty(), "hearth {args:?} failed without a message");
+    err
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hearth_cli_{}_{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `kin info --robot panda --json`.
+fn panda_info() -> Value {
+    json_ok(&["kin", "info", "--robot", "panda", "--json"])
+}
+
+fn movable_joints(info: &Value) -> Vec<String> {
+    info["movable_joints"]
+        .as_array()
+        .expect("movable_joints is an array")
+        .iter()
+        .map(|v| v.as_str().expect("joint names are strings").to_owned())
+        .collect()
+}
+
+fn list(q: &[f64]) -> String {
+    q.iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",")
+}
+
+fn vec3(v: &Value) -> [f64; 3] {
+    let a = v.as_array().unwrap_or_else(|| panic!("expected an array, got {v}"));
+    assert_eq!(a.len(), 3, "{v}");
+    [0, 1, 2].map(|i| a[i].as_f64().unwrap())
+}
+
+fn vec4(v: &Value) -> [f64; 4] {
+    let a = v.as_array().unwrap_or_else(|| panic!("expected an array, got {v}"));
+    assert_eq!(a.len(), 4, "{v}");
+    [0, 1, 2, 3].map(|i| a[i].as_f64().unwrap())
+}
+
+/// Angle between two unit quaternions (x, y, z, w).
+fn quat_angle(a: [f64; 4], b: [f64; 4]) -> f64 {
+    let dot: f64 = (0..4).map(|i| a[i] * b[i]).sum::<f64>().abs().min(1.0);
+    2.0 * dot.acos()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// `kin fk` for panda at `q`: (position, quat_xyzw) of `link`.
+fn panda_fk(q: &[f64], link: &str) -> ([f64; 3], [f64; 4]) {
+    let out = json_ok(&["kin", "fk", "--robot", "panda", "--q", &list(q), "--json"]);
+    let l = &out["links"][link];
+    assert!(l.is_object(), "no link {link} in fk output: {out}");
+    (vec3(&l["position"]), vec4(&l["quat_xyzw"]))
+}
+
+#[test]
+fn kin_info_json() {
+    let info = panda_info();
+    assert_eq!(info["name"], "panda");
+
+    let links: Vec<&str> = info["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    for l in [
+        "panda_link0",
+        "panda_link1",
+        "panda_link8",
+        "panda_hand",
+        "panda_hand_tcp",
+    ] {
+        assert!(links.contains(&l), "missing link {l}: {links:?}");
+    }
+    assert_eq!(info["root"], "panda_link0");
+
+    let joints = info["joints"].as_array().expect("joints is an array");
+    assert_eq!(joints.len(), links.len() - 1, "a tree has one joint per non-root link");
+    for j in joints {
+        for key in ["name", "type", "parent", "child", "limits"] {
+            assert!(j.get(key).is_some(), "joint without `{key}`: {j}");
+        }
+        let parent = j["parent"].as_str().unwrap();
+        let child = j["child"].as_str().unwrap();
+        assert!(links.contains(&parent) && links.contains(&child), "{j}");
+        let kind = j["type"].as_str().unwrap();
+        assert!(["revolute", "continuous", "prismatic", "fixed"].contains(&kind), "{j}");
+        if kind == "fixed" {
+            assert!(j["limits"].is_null(), "{j}");
+        } else {
+            for key in ["lower", "upper", "velocity", "effort"] {
+                assert!(j["limits"].get(key).is_some(), "limits without `{key}`: {j}");
+            }
+        }
+    }
+    let j1 = joints
+        .iter()
+        .find(|j| j["name"] == "panda_joint1")
+        .expect("panda_joint1");
+    assert_eq!(j1["type"], "revolute");
+    assert_eq!(j1["parent"], "panda_link0");
+    assert_eq!(j1["child"], "panda_link1");
+    assert!((j1["limits"]["lower"].as_f64().unwrap() + 2.8973).abs() < 1e-3, "{j1}");
+    assert!((j1["limits"]["upper"].as_f64().unwrap() - 2.8973).abs() < 1e-3, "{j1}");
+    let f2 = joints
+        .iter()
+        .find(|j| j["name"] == "panda_finger_joint2")
+        .expect("panda_finger_joint2");
+    assert_eq!(f2["mimic"]["joint"], "panda_finger_joint1", "{f2}");
+
+    let movable = movable_joints(&info);
+    assert_eq!(info["dof"].as_u64().unwrap() as usize, movable.len());
+    assert_eq!(
+        movable.len(),
+        8,
+        "7 arm joints + 1 finger (the other finger mimics): {movable:?}"
+    );
+    for i in 1..=7 {
+        assert_eq!(movable[i - 1], format!("panda_joint{i}"));
+    }
+    assert!(
+        !movable.contains(&"panda_finger_joint2".to_owned()),
+        "mimic joints are not variables"
+    );
+
+    // The human-readable form works too.
+    let o = hearth(&["kin", "info", "--robot", "panda"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("panda_joint7"));
+}
+
+#[test]
+fn kin_fk_json_at_zero() {
+    let dof = movable_joints(&panda_info()).len();
+    let q = vec![0.0; dof];
+    let out = json_ok(&["kin", "fk", "--robot", "panda", "--q", &list(&q), "--json"]);
+    let links = out["links"].as_object().expect("links is an object");
+    assert_eq!(links.len(), panda_info()["links"].as_array().unwrap().len());
+
+    let l0 = &links["panda_link0"];
+    assert!(dist(vec3(&l0["position"]), [0.0; 3]) < 1e-12, "{l0}");
+    assert!(quat_angle(vec4(&l0["quat_xyzw"]), [0.0, 0.0, 0.0, 1.0]) < 1e-9, "{l0}");
+
+    let l1 = &links["panda_link1"];
+    assert!(dist(vec3(&l1["position"]), [0.0, 0.0, 0.333]) < 1e-9, "{l1}");
+    assert!(quat_angle(vec4(&l1["quat_xyzw"]), [0.0, 0.0, 0.0, 1.0]) < 1e-9, "{l1}");
+
+    // The flange at zero: x = 0.0825 - 0.0825 + 0.088, z = 0.333 + 0.316 + 0.384 - 0.107,
+    // flipped by π about x.
+    let l8 = &links["panda_link8"];
+    assert!(dist(vec3(&l8["position"]), [0.088, 0.0, 0.926]) < 1e-6, "{l8}");
+    assert!(quat_angle(vec4(&l8["quat_xyzw"]), [1.0, 0.0, 0.0, 0.0]) < 1e-6, "{l8}");
+    for (name, pose) in links {
+        let q = vec4(&pose["quat_xyzw"]);
+        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((n - 1.0).abs() < 1e-9, "{name}: quaternion not unit: {q:?}");
+    }
+
+    // Joint 1 turns everything above link 0 about z.
+    let mut q = vec![0.0; dof];
+    q[0] = std::f64::consts::FRAC_PI_2;
+    let (p, _) = panda_fk(&q, "panda_link8");
+    assert!(dist(p, [0.0, 0.088, 0.926]) < 1e-6, "{p:?}");
+}
+
+#[test]
+fn kin_fk_rejects_a_wrong_length_q() {
+    let dof = movable_joints(&panda_info()).len();
+    let err = fails(&["kin", "fk", "--robot", "panda", "--q", "0,0,0"]);
+    assert!(
+        err.contains(&format!("{dof} values")),
+        "should name the expected count {dof}: {err}"
+    );
+    assert!(err.contains("panda_joint1"), "should list the joints: {err}");
+
+    let too_many = list(&vec![0.0; dof + 1]);
+    let err = fails(&["kin", "fk", "--robot", "panda", "--q", &too_many]);
+    assert!(err.contains(&format!("{dof}")), "{err}");
+}
+
+#[test]
+fn kin_fk_rejects_a_non_number() {
+    let err = fails(&["kin", "fk", "--robot", "panda", "--q", "0,abc"]);
+    assert!(err.contains("abc"), "should name the bad item: {err}");
+
+    let dof = movable_joints(&panda_info()).len();
+    let mut q: Vec<String> = vec!["0".into(); dof];
+    q[2] = "nan".into();
+    let err = fails(&["kin", "fk", "--robot", "panda", "--q", &q.join(",")]);
+    assert!(err.contains("panda_joint3"), "should name the non-finite joint: {err}");
+}
+
+#[test]
+fn kin_ik_reproduces_an_fk_pose() {
+    let movable = movable_joints(&panda_info());
+    let mut q_goal = vec![0.0; movable.len()];
+    for (i, v) in [0.3, -0.4, 0.2, -2.0, 0.1, 1.8, 0.6].iter().enumerate() {
+        q_goal[i] = *v;
+    }
+    let (p, r) = panda_fk(&q_goal, "panda_hand_tcp");
+    let pose = list(&[p[0], p[1], p[2], r[0], r[1], r[2], r[3]]);
+
+    let sol = json_ok(&[
+        "kin",
+        "ik",
+        "--robot",
+        "panda",
+        "--tip",
+        "panda_hand_tcp",
+        "--pose",
+        &pose,
+        "--json",
+    ]);
+    assert_eq!(sol["success"], true, "{sol}");
+    let names: Vec<&str> = sol["joint_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    let values: Vec<f64> = sol["q"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(names.len(), values.len(), "{sol}");
+    assert_eq!(names.len(), 7, "the arm chain: {names:?}");
+    assert!(sol["position_error"].as_f64().unwrap() <= 1e-3, "{sol}");
+
+    // Put the solution into a full configuration and check it through `kin fk`.
+    let mut q = vec![0.0; movable.len()];
+    for (n, v) in names.iter().zip(&values) {
+        let i = movable
+            .iter()
+            .position(|m| m == n)
+            .unwrap_or_else(|| panic!("{n} is not a movable joint"));
+        q[i] = *v;
+    }
+    let (p2, r2) = panda_fk(&q, "panda_hand_tcp");
+    assert!(dist(p, p2) < 2e-3, "position: target {p:?}, reached {p2:?}");
+    assert!(quat_angle(r, r2) < 2e-2, "orientation: target {r:?}, reached {r2:?}");
+}
+
+#[test]
+fn kin_ik_unreachable_pose_fails() {
+    let err = fails(&[
+        "kin",
+        "ik",
+        "--robot",
+        "panda",
+        "--tip",
+        "panda_hand_tcp",
+        "--pose",
+        "5,0,0.5,0,0,0,1",
+        "--json",
+    ]);
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn unknown_robot_name_fails_cleanly() {
+    let err = fails(&["kin", "info", "--robot", "does_not_exist"]);
+    assert!(err.contains("does_not_exist"), "should name the robot: {err}");
+    assert!(err.contains("panda"), "should list the built-in robots: {err}");
+    let err = fails(&["kin", "fk", "--robot", "does_not_exist", "--q", "0"]);
+    assert!(err.contains("does_not_exist"), "{err}");
+}
+
+#[test]
+fn missing_urdf_file_fails_naming_the_path() {
+    let err = fails(&["kin", "info", "--robot", "/nonexistent/file.urdf"]);
+    assert!(err.contains("/nonexistent/file.urdf"), "should name the path: {err}");
+}
+
+#[test]
+fn malformed_urdf_file_fails_naming_the_path() {
+    let dir = temp_dir("malformed");
+    let path = dir.join("broken.urdf");
+    std::fs::write(&path, r#"<robot name="broken"><link name="a"><visual></link></robot>"#).unwrap();
+    let p = path.to_str().unwrap();
+    let err = fails(&["kin", "info", "--robot", p, "--json"]);
+    assert!(err.contains("broken.urdf"), "should name the file: {err}");
+
+    // And a well-formed file with a semantic error.
+    let path2 = dir.join("dangling.urdf");
+    std::fs::write(
+        &path2,
+        r#"<robot name="r"><link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="ghost"/></joint></robot>"#,
+    )
+    .unwrap();
+    let err = fails(&["kin", "info", "--robot", path2.to_str().unwrap()]);
+    assert!(err.contains("ghost") && err.contains("dangling.urdf"), "{err}");
+
+    // A valid file loads through the same path.
+    let path3 = dir.join("ok.urdf");
+    std::fs::write(
+        &path3,
+        r#"<robot name="pendulum"><link name="a"/><link name="b"/>
+           <joint name="hinge" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/>
+           <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#,
+    )
+    .unwrap();
+    let info = json_ok(&["kin", "info", "--robot", path3.to_str().unwrap(), "--json"]);
+    assert_eq!(info["dof"], 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bench_kin_writes_json() {
+    let dir = temp_dir("bench");
+    let path = dir.join("bench.json");
+    let o = hearth(&[
+        "bench",
+        "kin",
+        "--robot",
+        "panda",
+        "--samples",
+        "20",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "bench failed: {}", stderr(&o));
+    let text = std::fs::read_to_string(&path).expect("bench wrote its JSON file");
+    let report: Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"));
+    for key in ["fk_ns_median", "jacobian_ns_median", "ik_us_median", "ik_us_p95"] {
+        let v = report[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("`{key}` missing or not a number: {report}"));
+        assert!(v.is_finite() && v > 0.0, "{key} = {v}");
+    }
+    let rate = report["ik_success_rate"].as_f64().expect("ik_success_rate");
+    assert!((0.0..=1.0).contains(&rate), "{rate}");
+    assert!(report["ik_us_p95"].as_f64().unwrap() >= report["ik_us_median"].as_f64().unwrap());
+    assert_eq!(report["ik_samples"], 20, "{report}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
