@@ -70,9 +70,10 @@ impl Chain {
             .chains()
             .iter()
             .find(|c| c.name == name)
-            .ok_or_else(|| KinematicsError::UnknownJoint {
+            .ok_or_else(|| KinematicsError::UnknownChain {
                 robot: model.name().to_owned(),
-                name: format!("(chain) {name}"),
+                name: name.to_owned(),
+                known: model.chains().iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "),
             })?;
         let mut chain = Self::new(model, &spec.joints)?;
         chain.name = spec.name.clone();

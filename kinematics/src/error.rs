@@ -200,6 +200,16 @@ pub enum KinematicsError {
         /// The requested joint.
         name: String,
     },
+    /// No chain with this name.
+    #[error("robot `{robot}` has no chain `{name}` (it has: {known})")]
+    UnknownChain {
+        /// Robot name.
+        robot: String,
+        /// The requested chain.
+        name: String,
+        /// The chains it has, comma separated.
+        known: String,
+    },
     /// A joint that cannot be part of a chain (fixed or mimic).
     #[error("joint `{name}` cannot be a chain variable: it is {why}")]
     NotAVariable {

@@ -166,3 +166,11 @@ fn same_seed_same_samples() {
     assert_eq!(draw(3), draw(3));
     assert_ne!(draw(3), draw(4));
 }
+
+#[test]
+fn unknown_chain_names_the_known_ones() {
+    let m = RobotModel::builtin("fetch").unwrap();
+    let err = Chain::named(&m, "leg").unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("leg") && text.contains("arm_with_torso"), "{text}");
+}

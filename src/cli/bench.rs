@@ -77,7 +77,7 @@ pub(crate) fn bench_chain(m: &RobotModel, name: Option<&str>) -> anyhow::Result<
             None => bail!("robot `{}` has no arm chain to benchmark (pass --chain)", m.name()),
         },
     };
-    Chain::named(m, &name).with_context(|| format!("chain `{name}`"))
+    Ok(Chain::named(m, &name)?)
 }
 
 /// IK on `samples` random reachable full poses, each from an unrelated random seed.

@@ -259,10 +259,7 @@ fn fk(a: FkArgs) -> anyhow::Result<()> {
 /// movable joint from the root to `tip`.
 pub(crate) fn chain_for(m: &RobotModel, chain: Option<&str>, tip: &str) -> anyhow::Result<Chain> {
     if let Some(name) = chain {
-        return Chain::named(m, name).with_context(|| {
-            let names: Vec<_> = m.chains().iter().map(|c| c.name.as_str()).collect();
-            format!("chain `{name}` (this robot has: {})", names.join(", "))
-        });
+        return Ok(Chain::named(m, name)?);
     }
     let tip_link = m.link_index(tip)?;
     if let Some(spec) = m.chains().iter().find(|c| c.tip == tip) {

@@ -71,7 +71,9 @@ pub struct IkSettings {
     pub max_iterations: usize,
     /// Attempts (the first from the seed, the rest from random configurations).
     pub max_attempts: usize,
-    /// Wall-clock limit over all attempts (`None`: attempts only).
+    /// Wall-clock limit over all attempts (`None`: attempts only). With `None`, a solve is a
+    /// pure function of target, seed, settings and RNG state (bit-for-bit reproducible); with a
+    /// limit, a solve that runs into it depends on machine speed.
     pub time_limit: Option<Duration>,
     /// Initial damping λ.
     pub damping: f64,
