@@ -37,10 +37,10 @@ fn main() {
     };
     let mut q_full = m.neutral_configuration();
     for (j, v) in &fingers {
-        if let Ok(ji) = m.joint_index(j) {
-            if let Some(var) = m.joints()[ji].variable {
-                q_full[var] = *v;
-            }
+        if let Ok(ji) = m.joint_index(j)
+            && let Some(var) = m.joints()[ji].variable
+        {
+            q_full[var] = *v;
         }
     }
     let mut poses = m.pose_buffer();
@@ -98,11 +98,8 @@ fn main() {
                         }
                         "sphere" => SharedShape::ball(o["radius"].as_f64().unwrap() as f32),
                         _ => {
-                            pose = pose
-                                * Pose::from_parts(
-                                    Vector::ZERO,
-                                    Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2),
-                                );
+                            pose *=
+                                Pose::from_parts(Vector::ZERO, Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2));
                             SharedShape::cylinder(
                                 o["half_length"].as_f64().unwrap() as f32,
                                 o["radius"].as_f64().unwrap() as f32,

@@ -73,7 +73,12 @@ impl Chain {
             .ok_or_else(|| KinematicsError::UnknownChain {
                 robot: model.name().to_owned(),
                 name: name.to_owned(),
-                known: model.chains().iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "),
+                known: model
+                    .chains()
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
             })?;
         let mut chain = Self::new(model, &spec.joints)?;
         chain.name = spec.name.clone();

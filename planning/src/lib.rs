@@ -1,9 +1,13 @@
 //! # hearth-planning
 //!
 //! Configuration spaces, collision checking and sampling-based planners (RRT, BiRRT,
-//! LazyPRM) with shortcutting. This crate builds on [`hearth_kinematics`]; its planners are
-//! being written (see the project's issues), and for now it exposes the kinematics it
-//! stands on.
+//! LazyPRM) with shortcutting, on top of [`hearth_kinematics`].
+//!
+//! - [`space`]: the [`Space`] trait (sample, distance, interpolate, bounds) for joint spaces
+//!   with bounded and continuous joints, SE(2) bases, and compound base + arm spaces.
+//! - [`obstacles`]: the [`Obstacles`] seam ("does this shape at this pose touch anything?",
+//!   distance, ray cast) and [`ParryScene`], its static implementation over a parry BVH.
+//! - [`problem`]: benchmark problem files (MotionBenchMaker JSON).
 //!
 //! ```
 //! let panda = hearth_planning::kinematics::RobotModel::builtin("panda").unwrap();
@@ -13,3 +17,10 @@
 
 /// The kinematics crate this one builds on.
 pub use hearth_kinematics as kinematics;
+
+pub mod obstacles;
+pub mod problem;
+pub mod space;
+
+pub use obstacles::{Obstacles, ParryScene};
+pub use space::Space;

@@ -1,0 +1,208 @@
+//! [`ParryScene`]: static named obstacles in a parry BVH.
+
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::math::{Pose, Real, Vector};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
+use parry3d::query::{self, Ray};
+use parry3d::shape::Shape;
+
+use super::{Obstacle, ObstacleId, Obstacles};
+
+/// A static obstacle scene: named parry shapes at fixed world poses, with a BVH over their
+/// bounding boxes built once at construction.
+///
+/// Queries descend the BVH (pruning by bounding box) and run exact parry tests only on the
+/// candidates; they do not allocate. Build one per benchmark problem
+/// ([`crate::problem::Problem::scene`]) or from your own [`Obstacle`]s.
+///
+/// **Margin.** With [`ParryScene::with_margin`]`(m)`, [`Obstacles::intersects`] and
+/// [`Obstacles::first_hit`] report a hit when the exact distance is `≤ m` (the query box is
+/// loosened by `m` for the BVH descent). `distance` and `cast_ray` ignore the margin.
+///
+/// **Unsupported shape pairs.** If parry cannot test a pair (it returns `Unsupported`), the
+/// pair counts as colliding (distance 0): conservative for planning.
+///
+/// ```
+/// use hearth_planning::obstacles::{Obstacle, Obstacles, ObstacleId, ParryScene};
+/// use parry3d::math::{Pose, Vector};
+/// use parry3d::shape::Ball;
+///
+/// let scene = ParryScene::new(vec![
+///     Obstacle::ball("ball", Vector::new(1.0, 0.0, 0.0), 0.1),
+///     Obstacle::cuboid("wall", Pose::translation(2.0, 0.0, 0.0), Vector::new(0.05, 1.0, 1.0)),
+/// ])
+/// .with_margin(0.02);
+/// let probe = Ball::new(0.1);
+/// // 0.01 m of clearance is inside the 2 cm margin:
+/// assert_eq!(scene.first_hit(&probe, &Pose::translation(1.21, 0.0, 0.0)), Some(ObstacleId(0)));
+/// assert!(!scene.intersects(&probe, &Pose::translation(1.5, 0.0, 0.0)));
+/// let (t, id) = scene.cast_ray(Vector::new(1.5, 0.0, 0.0), Vector::X, 10.0).unwrap();
+/// assert_eq!(scene.name(id), Some("wall"));
+/// assert!((t - 0.45).abs() < 1e-5);
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct ParryScene {
+    obstacles: Vec<Obstacle>,
+    bvh: Bvh,
+    bounds: Option<Aabb>,
+    margin: Real,
+}
+
+impl ParryScene {
+    /// Builds the scene and its BVH. Obstacle `i` gets [`ObstacleId`]`(i)`.
+    pub fn new(obstacles: Vec<Obstacle>) -> Self {
+        let aabbs: Vec<Aabb> = obstacles.iter().map(Obstacle::aabb).collect();
+        let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
+        let bounds = aabbs.iter().copied().reduce(|a, b| a.merged(&b));
+        Self {
+            obstacles,
+            bvh,
+            bounds,
+            margin: 0.0,
+        }
+    }
+
+    /// Sets the collision margin (see the type's docs). Negative or non-finite values count as 0.
+    pub fn with_margin(mut self, margin: Real) -> Self {
+        self.set_margin(margin);
+        self
+    }
+
+    /// Sets the collision margin in place. Negative or non-finite values count as 0.
+    pub fn set_margin(&mut self, margin: Real) {
+        self.margin = if margin.is_finite() && margin > 0.0 {
+            margin
+        } else {
+            0.0
+        };
+    }
+
+    /// The collision margin applied by `intersects` / `first_hit`.
+    pub fn margin(&self) -> Real {
+        self.margin
+    }
+
+    /// All obstacles, indexed by [`ObstacleId`].
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// The obstacle with this id.
+    pub fn get(&self, id: ObstacleId) -> Option<&Obstacle> {
+        self.obstacles.get(id.index())
+    }
+
+    /// The id of the first obstacle with this name.
+    pub fn find(&self, name: &str) -> Option<ObstacleId> {
+        self.obstacles
+            .iter()
+            .position(|o| o.name == name)
+            .map(|i| ObstacleId(i as u32))
+    }
+
+    /// Number of obstacles.
+    pub fn len(&self) -> usize {
+        self.obstacles.len()
+    }
+
+    /// Whether the scene has no obstacles.
+    pub fn is_empty(&self) -> bool {
+        self.obstacles.is_empty()
+    }
+
+    /// Exact test of one obstacle against `shape` at `pose`, honouring the margin.
+    fn touches(&self, index: u32, shape: &dyn Shape, pose: &Pose) -> bool {
+        let o = &self.obstacles[index as usize];
+        if self.margin > 0.0 {
+            return match query::distance(pose, shape, &o.pose, &*o.shape) {
+                Ok(d) => d.distance <= self.margin,
+                Err(_) => true,
+            };
+        }
+        match query::intersection_test(pose, shape, &o.pose, &*o.shape) {
+            Ok(hit) => hit.intersecting,
+            Err(_) => query::distance(pose, shape, &o.pose, &*o.shape).map_or(true, |d| d.distance <= 0.0),
+        }
+    }
+}
+
+impl FromIterator<Obstacle> for ParryScene {
+    fn from_iter<I: IntoIterator<Item = Obstacle>>(iter: I) -> Self {
+        Self::new(iter.into_iter().collect())
+    }
+}
+
+/// Euclidean gap between two boxes (0 when they overlap): a lower bound on the distance between
+/// anything inside them.
+#[inline]
+fn aabb_gap(a: &Aabb, b: &Aabb) -> Real {
+    (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO).length()
+}
+
+impl Obstacles for ParryScene {
+    fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
+        if self.obstacles.is_empty() {
+            return None;
+        }
+        let query_box = shape.compute_aabb(pose).loosened(self.margin);
+        self.bvh
+            .intersect_aabb(&query_box)
+            .find(|&i| self.touches(i, shape, pose))
+            .map(ObstacleId)
+    }
+
+    fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
+        if self.obstacles.is_empty() || max_dist.is_nan() || max_dist < 0.0 {
+            return None;
+        }
+        let query_box = shape.compute_aabb(pose);
+        let mut best = max_dist;
+        let mut best_id: Option<u32> = None;
+        self.bvh.traverse(|node: &BvhNode| {
+            let gap = aabb_gap(&node.aabb(), &query_box);
+            if gap > best || (best_id.is_some() && gap >= best) {
+                return TraversalAction::Prune;
+            }
+            if let Some(i) = node.leaf_data() {
+                let o = &self.obstacles[i as usize];
+                let d = query::distance(pose, shape, &o.pose, &*o.shape).map_or(0.0, |d| d.distance);
+                if d < best || (best_id.is_none() && d <= best) {
+                    best = d;
+                    best_id = Some(i);
+                    if d <= 0.0 {
+                        return TraversalAction::EarlyExit;
+                    }
+                }
+            }
+            TraversalAction::Continue
+        });
+        best_id.map(|i| (best, ObstacleId(i)))
+    }
+
+    fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)> {
+        if self.obstacles.is_empty() || !origin.is_finite() || !dir.is_finite() || dir == Vector::ZERO {
+            return None;
+        }
+        if max_toi.is_nan() || max_toi < 0.0 {
+            return None;
+        }
+        let ray = Ray::new(origin, dir);
+        // `find_best` keeps strictly smaller costs: nudge the bound so a hit exactly at
+        // `max_toi` counts.
+        let bound = max_toi.next_up();
+        self.bvh
+            .cast_ray(&ray, bound, |i, best| {
+                let o = &self.obstacles[i as usize];
+                o.shape.cast_ray(&o.pose, &ray, best.min(max_toi), true)
+            })
+            .map(|(i, t)| (t, ObstacleId(i)))
+    }
+
+    fn aabb(&self) -> Option<Aabb> {
+        self.bounds
+    }
+
+    fn name(&self, id: ObstacleId) -> Option<&str> {
+        self.get(id).map(|o| o.name.as_str())
+    }
+}

@@ -1,0 +1,762 @@
+//! Benchmark problem files: the MotionBenchMaker (MBM) JSON format of `bench/mbm/<robot>/`.
+//!
+//! A [`ProblemSet`] is one file (`<family>.json`): the robot, the planned joint names, and a list
+//! of [`Problem`]s, each with box / sphere / cylinder obstacles ([`ObstacleSpec`]), a start
+//! configuration and one or more goal configurations. [`JointsInfo`] is the robot's
+//! `joints.json` (limits, allowed self-collision pairs, finger opening).
+//!
+//! Everything is checked on load: malformed JSON, an unknown obstacle kind, a configuration
+//! whose length differs from `joint_names`, a non-finite number, a non-unit quaternion or a
+//! negative size gives a [`ProblemError`] that names the file, the problem id and the field.
+//!
+//! ```
+//! use hearth_planning::problem::ProblemSet;
+//! use hearth_planning::Obstacles;
+//! use parry3d::math::Pose;
+//! use parry3d::shape::Ball;
+//!
+//! let json = r#"{"robot": "toy", "family": "demo", "joint_names": ["j1", "j2"],
+//!   "problems": [{"id": 1, "valid": true,
+//!     "obstacles": [{"kind": "sphere", "center": [1, 0, 0], "radius": 0.2, "name": "ball"}],
+//!     "start": [0, 0], "goals": [[1, 1]]}]}"#;
+//! let set = ProblemSet::from_json_str(json).unwrap();
+//! let scene = set.problems[0].scene();
+//! assert!(scene.intersects(&Ball::new(0.1), &Pose::translation(1.25, 0.0, 0.0)));
+//!
+//! let bad = json.replace("\"sphere\"", "\"cone\"");
+//! let err = ProblemSet::from_json_str(&bad).unwrap_err();
+//! assert!(err.to_string().contains("problem 1: obstacles[0].kind"), "{err}");
+//! ```
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use parry3d::math::{Pose, Rotation, Vector};
+use serde::{Deserialize, Serialize};
+
+use crate::obstacles::{Obstacle, ParryScene};
+
+/// How far a quaternion's norm may be from 1 before it is rejected.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
+
+/// The file name in a problem folder that holds [`JointsInfo`], skipped by [`load_dir`].
+pub const JOINTS_FILE: &str = "joints.json";
+
+/// What is wrong with one field of a problem file.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Defect {
+    /// The field is absent.
+    #[error("missing")]
+    Missing,
+    /// An obstacle `kind` other than `box`, `sphere`, `cylinder`.
+    #[error("unknown obstacle kind `{0}` (expected box, sphere or cylinder)")]
+    UnknownKind(String),
+    /// A vector has the wrong number of entries.
+    #[error("has {found} values, expected {expected}")]
+    WrongLength {
+        /// Required length.
+        expected: usize,
+        /// Actual length.
+        found: usize,
+    },
+    /// A NaN or infinite number.
+    #[error("is not finite ({0})")]
+    NotFinite(f64),
+    /// A quaternion whose norm is not 1 (within [`QUATERNION_NORM_TOLERANCE`]); includes zero.
+    #[error("is not a unit quaternion (norm {0})")]
+    NotUnitQuaternion(f64),
+    /// A negative size (radius, half-extent, half-length).
+    #[error("is negative ({0})")]
+    Negative(f64),
+    /// A list that must not be empty is empty.
+    #[error("is empty")]
+    Empty,
+    /// A lower limit above the upper one.
+    #[error("lower limit {lower} is above upper limit {upper}")]
+    InvertedLimits {
+        /// Lower limit.
+        lower: f64,
+        /// Upper limit.
+        upper: f64,
+    },
+}
+
+/// Loading a problem or joints file failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// The file or folder could not be read.
+    #[error("{}: cannot read: {source}", file.display())]
+    Io {
+        /// The file or folder.
+        file: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not JSON of the expected shape (serde's message has line and column).
+    #[error("{}: malformed JSON: {source}", file.display())]
+    Json {
+        /// The file (`<string>` for [`ProblemSet::from_json_str`]).
+        file: PathBuf,
+        /// The parser error.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A field has a bad value.
+    #[error("{}: {}{field} {defect}", file.display(), ProblemPrefix(*problem))]
+    Invalid {
+        /// The file (`<string>` for in-memory input).
+        file: PathBuf,
+        /// The problem's `id`, `None` for a file-level field.
+        problem: Option<u32>,
+        /// The field path, e.g. `obstacles[3].quat_xyzw` or `goals[0]`.
+        field: String,
+        /// What is wrong with it.
+        defect: Defect,
+    },
+}
+
+impl ProblemError {
+    /// The defect, for [`ProblemError::Invalid`].
+    pub fn defect(&self) -> Option<&Defect> {
+        match self {
+            Self::Invalid { defect, .. } => Some(defect),
+            _ => None,
+        }
+    }
+
+    /// The field path, for [`ProblemError::Invalid`].
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            Self::Invalid { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+
+    /// The problem id, for [`ProblemError::Invalid`] inside a problem.
+    pub fn problem(&self) -> Option<u32> {
+        match self {
+            Self::Invalid { problem, .. } => *problem,
+            _ => None,
+        }
+    }
+
+    /// The file the error is about.
+    pub fn file(&self) -> &Path {
+        match self {
+            Self::Io { file, .. } | Self::Json { file, .. } | Self::Invalid { file, .. } => file,
+        }
+    }
+}
+
+struct ProblemPrefix(Option<u32>);
+
+impl fmt::Display for ProblemPrefix {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(id) => write!(f, "problem {id}: "),
+            None => Ok(()),
+        }
+    }
+}
+
+/// One obstacle primitive, in metres, in the robot base frame (z up).
+///
+/// `quat_xyzw` rotates the primitive's local frame into the world (order x, y, z, w; normalised
+/// on load). Serialises back to the file format (`"kind": "box" | "sphere" | "cylinder"`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ObstacleSpec {
+    /// A box.
+    Box {
+        /// Box centre.
+        center: [f64; 3],
+        /// Half-extents along the box's local x, y, z.
+        half_extents: [f64; 3],
+        /// Orientation, x y z w.
+        quat_xyzw: [f64; 4],
+        /// MBM collision-object id.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+    },
+    /// A sphere.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius.
+        radius: f64,
+        /// MBM collision-object id.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+    },
+    /// A flat-capped cylinder along its local z axis, spanning `center ± half_length · R·ẑ`.
+    Cylinder {
+        /// Mid-point of the axis.
+        center: [f64; 3],
+        /// Radius.
+        radius: f64,
+        /// Half the length along the local z axis.
+        half_length: f64,
+        /// Orientation, x y z w.
+        quat_xyzw: [f64; 4],
+        /// MBM collision-object id.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+    },
+}
+
+impl ObstacleSpec {
+    /// `"box"`, `"sphere"` or `"cylinder"`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Box { .. } => "box",
+            Self::Sphere { .. } => "sphere",
+            Self::Cylinder { .. } => "cylinder",
+        }
+    }
+
+    /// The obstacle's name from the file, if any.
+    pub fn name(&self) -> Option<&str> {
+        match self {
+            Self::Box { name, .. } | Self::Sphere { name, .. } | Self::Cylinder { name, .. } => name.as_deref(),
+        }
+    }
+
+    /// The primitive's centre.
+    pub fn center(&self) -> [f64; 3] {
+        match self {
+            Self::Box { center, .. } | Self::Sphere { center, .. } | Self::Cylinder { center, .. } => *center,
+        }
+    }
+
+    /// The parry obstacle (f32), named after the file's `name` or `"<kind><index>"` without one.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ObstacleSpec;
+    /// let spec = ObstacleSpec::Sphere { center: [0.0, 0.0, 1.0], radius: 0.5, name: None };
+    /// let o = spec.to_obstacle(3);
+    /// assert_eq!(o.name, "sphere3");
+    /// assert!((o.aabb().maxs.z - 1.5).abs() < 1e-6);
+    /// ```
+    pub fn to_obstacle(&self, index: usize) -> Obstacle {
+        let name = self
+            .name()
+            .map_or_else(|| format!("{}{index}", self.kind()), str::to_owned);
+        let v = |a: [f64; 3]| Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
+        let pose = |c: [f64; 3], q: [f64; 4]| {
+            let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+            let n = if n > 0.0 { n } else { 1.0 };
+            let r = Rotation::from_xyzw(
+                (q[0] / n) as f32,
+                (q[1] / n) as f32,
+                (q[2] / n) as f32,
+                (q[3] / n) as f32,
+            );
+            Pose::from_parts(v(c), r.normalize())
+        };
+        match self {
+            Self::Box {
+                center,
+                half_extents,
+                quat_xyzw,
+                ..
+            } => Obstacle::cuboid(name, pose(*center, *quat_xyzw), v(*half_extents)),
+            Self::Sphere { center, radius, .. } => Obstacle::ball(name, v(*center), *radius as f32),
+            Self::Cylinder {
+                center,
+                radius,
+                half_length,
+                quat_xyzw,
+                ..
+            } => Obstacle::cylinder(name, pose(*center, *quat_xyzw), *half_length as f32, *radius as f32),
+        }
+    }
+}
+
+/// One motion-planning query: obstacles, a start and goal configurations (in the set's
+/// `joint_names` order).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Problem {
+    /// The MBM problem index (1–100).
+    pub id: u32,
+    /// Start collision-free and some goal collision-free in VAMP's model; planners skip `false`.
+    pub valid: bool,
+    /// The obstacles.
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Start configuration.
+    pub start: Vec<f64>,
+    /// Goal configurations; reaching any one solves the problem.
+    pub goals: Vec<Vec<f64>>,
+}
+
+impl Problem {
+    /// A [`ParryScene`] of the obstacles (margin 0), obstacle `i` as `ObstacleId(i)`.
+    pub fn scene(&self) -> ParryScene {
+        self.obstacles
+            .iter()
+            .enumerate()
+            .map(|(i, o)| o.to_obstacle(i))
+            .collect()
+    }
+}
+
+/// One problem file: a robot, a family (scene type) and its problems.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ProblemSet {
+    /// Robot name (`panda`, `fetch`).
+    pub robot: String,
+    /// Problem family (`table_pick`, `bookshelf_small`, …).
+    pub family: String,
+    /// Planned joints, in the order of every configuration.
+    pub joint_names: Vec<String>,
+    /// Where the data came from (free-form, informational).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source: Option<serde_json::Value>,
+    /// The problems, in file order.
+    pub problems: Vec<Problem>,
+}
+
+impl ProblemSet {
+    /// Reads and checks a problem file.
+    ///
+    /// # Errors
+    /// [`ProblemError`] naming `path` (and the problem id and field for a bad value).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ProblemError> {
+        let path = path.as_ref();
+        let text = read(path)?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and checks a problem set from a JSON string (errors name the file `<string>`).
+    ///
+    /// # Errors
+    /// As [`ProblemSet::load`].
+    pub fn from_json_str(json: &str) -> Result<Self, ProblemError> {
+        Self::parse(json, Path::new("<string>"))
+    }
+
+    fn parse(json: &str, file: &Path) -> Result<Self, ProblemError> {
+        let raw: RawSet = serde_json::from_str(json).map_err(|source| ProblemError::Json {
+            file: file.to_owned(),
+            source,
+        })?;
+        let mut ctx = Ctx { file, problem: None };
+        if raw.joint_names.is_empty() {
+            return Err(ctx.err("joint_names", Defect::Empty));
+        }
+        let dof = raw.joint_names.len();
+        let problems = raw
+            .problems
+            .into_iter()
+            .map(|p| {
+                ctx.problem = Some(p.id);
+                p.convert(&ctx, dof)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            robot: raw.robot,
+            family: raw.family,
+            joint_names: raw.joint_names,
+            source: raw.source,
+            problems,
+        })
+    }
+
+    /// Re-checks a set built or edited in code (the same checks as loading; errors name the
+    /// file `<memory>`).
+    ///
+    /// # Errors
+    /// The first bad field found.
+    pub fn validate(&self) -> Result<(), ProblemError> {
+        let mut ctx = Ctx {
+            file: Path::new("<memory>"),
+            problem: None,
+        };
+        if self.joint_names.is_empty() {
+            return Err(ctx.err("joint_names", Defect::Empty));
+        }
+        for p in &self.problems {
+            ctx.problem = Some(p.id);
+            let raw = RawProblem {
+                id: p.id,
+                valid: p.valid,
+                obstacles: p.obstacles.iter().map(RawObstacle::from).collect(),
+                start: p.start.clone(),
+                goals: p.goals.clone(),
+            };
+            raw.convert(&ctx, self.joint_names.len())?;
+        }
+        Ok(())
+    }
+
+    /// Problems whose `valid` flag is set.
+    pub fn valid_problems(&self) -> impl Iterator<Item = &Problem> {
+        self.problems.iter().filter(|p| p.valid)
+    }
+
+    /// The problem with this id.
+    pub fn problem(&self, id: u32) -> Option<&Problem> {
+        self.problems.iter().find(|p| p.id == id)
+    }
+}
+
+/// Loads every `*.json` problem set in `dir` except [`JOINTS_FILE`], sorted by file name.
+///
+/// # Errors
+/// The first file that fails to load, or the folder cannot be read.
+pub fn load_dir(dir: impl AsRef<Path>) -> Result<Vec<ProblemSet>, ProblemError> {
+    let dir = dir.as_ref();
+    let io = |source| ProblemError::Io {
+        file: dir.to_owned(),
+        source,
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        let is_json = path.extension().is_some_and(|e| e == "json");
+        let is_joints = path.file_name().is_some_and(|n| n == JOINTS_FILE);
+        if is_json && !is_joints && path.is_file() {
+            files.push(path);
+        }
+    }
+    files.sort();
+    files.iter().map(ProblemSet::load).collect()
+}
+
+/// Position bounds (`lower`, `upper`) of the planned joints.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bounds {
+    /// Lower bounds.
+    pub lower: Vec<f64>,
+    /// Upper bounds.
+    pub upper: Vec<f64>,
+}
+
+/// The `notes` of a `joints.json`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct JointsNotes {
+    /// Link pairs allowed to touch (MBM's allowed-collision matrix).
+    #[serde(default)]
+    pub self_collision_allowed_pairs: Vec<[String; 2]>,
+    /// The bounds the MBM/VAMP model samples in (Panda), when given.
+    #[serde(default)]
+    pub mbm_model_bounds: Option<Bounds>,
+    /// Fixed Panda finger positions (m), when given.
+    #[serde(default)]
+    pub mbm_finger_joint_positions: Option<Vec<f64>>,
+    /// Fixed Fetch gripper finger positions (m), when given.
+    #[serde(default)]
+    pub mbm_gripper_finger_positions: Option<Vec<f64>>,
+}
+
+/// A robot's `joints.json`: limits of the planned joints (configuration order) and MBM notes.
+///
+/// ```
+/// use hearth_planning::problem::JointsInfo;
+/// let info = JointsInfo::from_json_str(r#"{"robot": "toy", "joint_names": ["a"],
+///     "lower": [-1], "upper": [1], "velocity": [2],
+///     "notes": {"self_collision_allowed_pairs": [["l0", "l1"]], "mbm_finger_joint_positions": [0.04]}}"#)
+///     .unwrap();
+/// assert_eq!(info.finger_positions(), Some(&[0.04][..]));
+/// assert!(info.acceleration.is_none());
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointsInfo {
+    /// Robot name.
+    pub robot: String,
+    /// Planned joints, in configuration order.
+    pub joint_names: Vec<String>,
+    /// Lower position limits.
+    pub lower: Vec<f64>,
+    /// Upper position limits.
+    pub upper: Vec<f64>,
+    /// Velocity limits.
+    pub velocity: Vec<f64>,
+    /// Acceleration limits, when given.
+    #[serde(default)]
+    pub acceleration: Option<Vec<f64>>,
+    /// Jerk limits, when given.
+    #[serde(default)]
+    pub jerk: Option<Vec<f64>>,
+    /// Which joints are continuous (bounded to ±π in the file), when given.
+    #[serde(default)]
+    pub continuous: Option<Vec<bool>>,
+    /// Notes: allowed self-collision pairs, model bounds, finger opening.
+    #[serde(default)]
+    pub notes: JointsNotes,
+}
+
+impl JointsInfo {
+    /// Reads and checks a `joints.json`.
+    ///
+    /// # Errors
+    /// [`ProblemError`] naming the file and field (every limit list must match `joint_names`,
+    /// be finite, and have `lower ≤ upper`).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ProblemError> {
+        let path = path.as_ref();
+        let text = read(path)?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and checks a `joints.json` from a string (errors name the file `<string>`).
+    ///
+    /// # Errors
+    /// As [`JointsInfo::load`].
+    pub fn from_json_str(json: &str) -> Result<Self, ProblemError> {
+        Self::parse(json, Path::new("<string>"))
+    }
+
+    fn parse(json: &str, file: &Path) -> Result<Self, ProblemError> {
+        let info: Self = serde_json::from_str(json).map_err(|source| ProblemError::Json {
+            file: file.to_owned(),
+            source,
+        })?;
+        let ctx = Ctx { file, problem: None };
+        let n = info.joint_names.len();
+        if n == 0 {
+            return Err(ctx.err("joint_names", Defect::Empty));
+        }
+        ctx.vector("lower", &info.lower, n)?;
+        ctx.vector("upper", &info.upper, n)?;
+        ctx.vector("velocity", &info.velocity, n)?;
+        for (field, v) in [("acceleration", &info.acceleration), ("jerk", &info.jerk)] {
+            if let Some(v) = v {
+                ctx.vector(field, v, n)?;
+            }
+        }
+        if let Some(c) = &info.continuous
+            && c.len() != n
+        {
+            return Err(ctx.err(
+                "continuous",
+                Defect::WrongLength {
+                    expected: n,
+                    found: c.len(),
+                },
+            ));
+        }
+        for (i, (&lower, &upper)) in info.lower.iter().zip(&info.upper).enumerate() {
+            if lower > upper {
+                return Err(ctx.err(format!("lower[{i}]"), Defect::InvertedLimits { lower, upper }));
+            }
+        }
+        if let Some(b) = &info.notes.mbm_model_bounds {
+            ctx.vector("notes.mbm_model_bounds.lower", &b.lower, n)?;
+            ctx.vector("notes.mbm_model_bounds.upper", &b.upper, n)?;
+        }
+        Ok(info)
+    }
+
+    /// The fixed finger positions MBM plans with (Panda `mbm_finger_joint_positions` or Fetch
+    /// `mbm_gripper_finger_positions`).
+    pub fn finger_positions(&self) -> Option<&[f64]> {
+        self.notes
+            .mbm_finger_joint_positions
+            .as_deref()
+            .or(self.notes.mbm_gripper_finger_positions.as_deref())
+    }
+}
+
+fn read(path: &Path) -> Result<String, ProblemError> {
+    std::fs::read_to_string(path).map_err(|source| ProblemError::Io {
+        file: path.to_owned(),
+        source,
+    })
+}
+
+// ---- raw file layout and checks -------------------------------------------------------------
+
+#[derive(Deserialize)]
+struct RawSet {
+    robot: String,
+    family: String,
+    joint_names: Vec<String>,
+    #[serde(default)]
+    source: Option<serde_json::Value>,
+    problems: Vec<RawProblem>,
+}
+
+#[derive(Deserialize)]
+struct RawProblem {
+    id: u32,
+    #[serde(default = "yes")]
+    valid: bool,
+    #[serde(default)]
+    obstacles: Vec<RawObstacle>,
+    start: Vec<f64>,
+    goals: Vec<Vec<f64>>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize)]
+struct RawObstacle {
+    kind: String,
+    center: Option<Vec<f64>>,
+    half_extents: Option<Vec<f64>>,
+    radius: Option<f64>,
+    half_length: Option<f64>,
+    quat_xyzw: Option<Vec<f64>>,
+    name: Option<String>,
+}
+
+impl From<&ObstacleSpec> for RawObstacle {
+    fn from(spec: &ObstacleSpec) -> Self {
+        let mut raw = RawObstacle {
+            kind: spec.kind().to_owned(),
+            center: Some(spec.center().to_vec()),
+            half_extents: None,
+            radius: None,
+            half_length: None,
+            quat_xyzw: None,
+            name: spec.name().map(str::to_owned),
+        };
+        match spec {
+            ObstacleSpec::Box {
+                half_extents,
+                quat_xyzw,
+                ..
+            } => {
+                raw.half_extents = Some(half_extents.to_vec());
+                raw.quat_xyzw = Some(quat_xyzw.to_vec());
+            }
+            ObstacleSpec::Sphere { radius, .. } => raw.radius = Some(*radius),
+            ObstacleSpec::Cylinder {
+                radius,
+                half_length,
+                quat_xyzw,
+                ..
+            } => {
+                raw.radius = Some(*radius);
+                raw.half_length = Some(*half_length);
+                raw.quat_xyzw = Some(quat_xyzw.to_vec());
+            }
+        }
+        raw
+    }
+}
+
+struct Ctx<'a> {
+    file: &'a Path,
+    problem: Option<u32>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, field: impl Into<String>, defect: Defect) -> ProblemError {
+        ProblemError::Invalid {
+            file: self.file.to_owned(),
+            problem: self.problem,
+            field: field.into(),
+            defect,
+        }
+    }
+
+    /// Checks length and finiteness.
+    fn vector(&self, field: &str, v: &[f64], expected: usize) -> Result<(), ProblemError> {
+        if v.len() != expected {
+            return Err(self.err(
+                field,
+                Defect::WrongLength {
+                    expected,
+                    found: v.len(),
+                },
+            ));
+        }
+        match v.iter().position(|x| !x.is_finite()) {
+            Some(i) => Err(self.err(format!("{field}[{i}]"), Defect::NotFinite(v[i]))),
+            None => Ok(()),
+        }
+    }
+
+    fn array<const N: usize>(&self, field: &str, v: Option<&Vec<f64>>) -> Result<[f64; N], ProblemError> {
+        let v = v.ok_or_else(|| self.err(field, Defect::Missing))?;
+        self.vector(field, v, N)?;
+        let mut out = [0.0; N];
+        out.copy_from_slice(v);
+        Ok(out)
+    }
+
+    fn size(&self, field: &str, v: Option<f64>) -> Result<f64, ProblemError> {
+        let v = v.ok_or_else(|| self.err(field, Defect::Missing))?;
+        if !v.is_finite() {
+            return Err(self.err(field, Defect::NotFinite(v)));
+        }
+        if v < 0.0 {
+            return Err(self.err(field, Defect::Negative(v)));
+        }
+        Ok(v)
+    }
+
+    fn sizes(&self, field: &str, v: Option<&Vec<f64>>) -> Result<[f64; 3], ProblemError> {
+        let a = self.array::<3>(field, v)?;
+        match a.iter().position(|&x| x < 0.0) {
+            Some(i) => Err(self.err(format!("{field}[{i}]"), Defect::Negative(a[i]))),
+            None => Ok(a),
+        }
+    }
+
+    fn quaternion(&self, field: &str, v: Option<&Vec<f64>>) -> Result<[f64; 4], ProblemError> {
+        let q = self.array::<4>(field, v)?;
+        let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+            return Err(self.err(field, Defect::NotUnitQuaternion(norm)));
+        }
+        Ok(q.map(|x| x / norm))
+    }
+}
+
+impl RawObstacle {
+    fn convert(self, ctx: &Ctx<'_>, i: usize) -> Result<ObstacleSpec, ProblemError> {
+        let f = |name: &str| format!("obstacles[{i}].{name}");
+        let center = ctx.array::<3>(&f("center"), self.center.as_ref())?;
+        let name = self.name;
+        Ok(match self.kind.as_str() {
+            "box" => ObstacleSpec::Box {
+                center,
+                half_extents: ctx.sizes(&f("half_extents"), self.half_extents.as_ref())?,
+                quat_xyzw: ctx.quaternion(&f("quat_xyzw"), self.quat_xyzw.as_ref())?,
+                name,
+            },
+            "sphere" => ObstacleSpec::Sphere {
+                center,
+                radius: ctx.size(&f("radius"), self.radius)?,
+                name,
+            },
+            "cylinder" => ObstacleSpec::Cylinder {
+                center,
+                radius: ctx.size(&f("radius"), self.radius)?,
+                half_length: ctx.size(&f("half_length"), self.half_length)?,
+                quat_xyzw: ctx.quaternion(&f("quat_xyzw"), self.quat_xyzw.as_ref())?,
+                name,
+            },
+            other => return Err(ctx.err(f("kind"), Defect::UnknownKind(other.to_owned()))),
+        })
+    }
+}
+
+impl RawProblem {
+    fn convert(self, ctx: &Ctx<'_>, dof: usize) -> Result<Problem, ProblemError> {
+        ctx.vector("start", &self.start, dof)?;
+        if self.goals.is_empty() {
+            return Err(ctx.err("goals", Defect::Empty));
+        }
+        for (g, goal) in self.goals.iter().enumerate() {
+            ctx.vector(&format!("goals[{g}]"), goal, dof)?;
+        }
+        let obstacles = self
+            .obstacles
+            .into_iter()
+            .enumerate()
+            .map(|(i, o)| o.convert(ctx, i))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Problem {
+            id: self.id,
+            valid: self.valid,
+            obstacles,
+            start: self.start,
+            goals: self.goals,
+        })
+    }
+}

@@ -1,0 +1,193 @@
+//! [`CompoundSpace`]: two spaces side by side, such as a mobile base and an arm.
+
+use rand::Rng;
+
+use super::{Space, SpaceError, valid_weight};
+
+/// Two spaces concatenated: a state is the first space's coordinates followed by the second's
+/// (e.g. an [`Se2Space`](super::Se2Space) base then a [`JointSpace`](super::JointSpace) arm).
+///
+/// The distance is the weighted sum `w₁·d₁ + w₂·d₂` of the parts' distances (weights default
+/// to 1), a metric whenever both parts' are. Everything else acts on each part's slice, so the
+/// pair costs nothing over calling the parts directly; nest pairs for more than two parts
+/// (`CompoundSpace<A, CompoundSpace<B, C>>`).
+///
+/// ```
+/// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space, Space};
+///
+/// let base = Se2Space::new([-5.0, -5.0], [5.0, 5.0])?;
+/// let arm = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+/// let space = CompoundSpace::new(base, arm).with_weights(1.0, 0.5)?;
+/// assert_eq!(space.dim(), 5);
+/// assert_eq!(space.coordinate_name(3), Some("q0"));
+/// let (a, b) = ([0.0, 0.0, 0.0, 0.0, 0.0], [3.0, 4.0, 0.0, 1.0, 0.0]);
+/// assert_eq!(space.distance(&a, &b), 5.0 + 0.5 * 1.0);
+/// // Errors name coordinates of the whole state.
+/// assert!(matches!(
+///     space.check(&[0.0, 0.0, 0.0, 2.0, 0.0]),
+///     Err(hearth_planning::space::SpaceError::OutOfBounds { index: 3, .. })
+/// ));
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompoundSpace<A, B> {
+    first: A,
+    second: B,
+    weights: [f64; 2],
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl<A: Space, B: Space> CompoundSpace<A, B> {
+    /// The concatenation of `first` and `second`, with both distance weights 1.
+    pub fn new(first: A, second: B) -> Self {
+        let lower = first.lower().iter().chain(second.lower()).copied().collect();
+        let upper = first.upper().iter().chain(second.upper()).copied().collect();
+        Self {
+            first,
+            second,
+            weights: [1.0, 1.0],
+            lower,
+            upper,
+        }
+    }
+
+    /// The same space with distance weights for the two parts (finite, non-negative).
+    pub fn with_weights(mut self, first: f64, second: f64) -> Result<Self, SpaceError> {
+        for (what, value) in [("first space", first), ("second space", second)] {
+            if !valid_weight(value) {
+                return Err(SpaceError::InvalidWeight {
+                    what: what.to_owned(),
+                    value,
+                });
+            }
+        }
+        self.weights = [first, second];
+        Ok(self)
+    }
+
+    /// The first part.
+    pub fn first(&self) -> &A {
+        &self.first
+    }
+
+    /// The second part.
+    pub fn second(&self) -> &B {
+        &self.second
+    }
+
+    /// Distance weights of the two parts.
+    pub fn weights(&self) -> [f64; 2] {
+        self.weights
+    }
+
+    /// Splits a state into the parts' coordinates.
+    ///
+    /// Panics if `q` is shorter than the first part's dimension.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space};
+    ///
+    /// let space = CompoundSpace::new(Se2Space::new([0.0; 2], [1.0; 2])?, JointSpace::new(&[0.0], &[1.0], &[false])?);
+    /// let (base, arm) = space.split(&[0.1, 0.2, 0.3, 0.4]);
+    /// assert_eq!((base, arm), (&[0.1, 0.2, 0.3][..], &[0.4][..]));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    #[inline]
+    pub fn split<'q>(&self, q: &'q [f64]) -> (&'q [f64], &'q [f64]) {
+        q.split_at(self.first.dim())
+    }
+
+    /// Splits a mutable state into the parts' coordinates.
+    ///
+    /// Panics if `q` is shorter than the first part's dimension.
+    #[inline]
+    pub fn split_mut<'q>(&self, q: &'q mut [f64]) -> (&'q mut [f64], &'q mut [f64]) {
+        q.split_at_mut(self.first.dim())
+    }
+}
+
+impl<A: Space, B: Space> Space for CompoundSpace<A, B> {
+    #[inline]
+    fn dim(&self) -> usize {
+        self.lower.len()
+    }
+
+    #[inline]
+    fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), self.dim());
+        let (o1, o2) = self.split_mut(out);
+        self.first.sample(rng, o1);
+        self.second.sample(rng, o2);
+    }
+
+    #[inline]
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        let ((a1, a2), (b1, b2)) = (self.split(a), self.split(b));
+        self.weights[0] * self.first.distance(a1, b1) + self.weights[1] * self.second.distance(a2, b2)
+    }
+
+    #[inline]
+    fn interpolate(&self, a: &[f64], b: &[f64], t: f64, out: &mut [f64]) {
+        let ((a1, a2), (b1, b2)) = (self.split(a), self.split(b));
+        let (o1, o2) = self.split_mut(out);
+        self.first.interpolate(a1, b1, t, o1);
+        self.second.interpolate(a2, b2, t, o2);
+    }
+
+    #[inline]
+    fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+
+    #[inline]
+    fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+
+    #[inline]
+    fn enforce_bounds(&self, q: &mut [f64]) {
+        let (q1, q2) = self.split_mut(q);
+        self.first.enforce_bounds(q1);
+        self.second.enforce_bounds(q2);
+    }
+
+    #[inline]
+    fn satisfies_bounds(&self, q: &[f64]) -> bool {
+        if q.len() != self.dim() {
+            return false;
+        }
+        let (q1, q2) = self.split(q);
+        self.first.satisfies_bounds(q1) && self.second.satisfies_bounds(q2)
+    }
+
+    #[inline]
+    fn difference(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        let ((a1, a2), (b1, b2)) = (self.split(a), self.split(b));
+        let (o1, o2) = self.split_mut(out);
+        self.first.difference(a1, b1, o1);
+        self.second.difference(a2, b2, o2);
+    }
+
+    fn check(&self, q: &[f64]) -> Result<(), SpaceError> {
+        if q.len() != self.dim() {
+            return Err(SpaceError::DimensionMismatch {
+                what: "state",
+                expected: self.dim(),
+                got: q.len(),
+            });
+        }
+        let (q1, q2) = self.split(q);
+        self.first.check(q1)?;
+        self.second.check(q2).map_err(|e| e.offset(q1.len()))
+    }
+
+    fn coordinate_name(&self, i: usize) -> Option<&str> {
+        let n = self.first.dim();
+        if i < n {
+            self.first.coordinate_name(i)
+        } else {
+            self.second.coordinate_name(i - n)
+        }
+    }
+}

@@ -1,0 +1,305 @@
+//! Configuration spaces: sampling, distance, interpolation and bounds of planner states.
+//!
+//! The cut follows OMPL's `StateSpace`, with states as plain `&[f64]` / `&mut [f64]` slices
+//! so that planners keep them in flat arenas and nothing on the hot path allocates:
+//!
+//! - [`Space`]: the trait planners are generic over.
+//! - [`JointSpace`]: a robot chain's joints, bounded or continuous (wrapping) ones.
+//! - [`Se2Space`]: a mobile base `(x, y, yaw)`.
+//! - [`CompoundSpace`]: two spaces side by side (e.g. a base and an arm), zero-cost.
+//! - [`SpaceError`]: what is wrong with a state or with a space's description.
+//!
+//! ```
+//! use hearth_planning::space::{JointSpace, Space};
+//! use rand::SeedableRng;
+//!
+//! // A bounded joint and a continuous one.
+//! let space = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+//! let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+//! let mut q = [0.0; 2];
+//! space.sample(&mut rng, &mut q);
+//! assert!(space.satisfies_bounds(&q));
+//! // The continuous joint goes the short way round, through ±π.
+//! assert!((space.distance(&[0.0, 3.1], &[0.0, -3.1]) - 0.0832).abs() < 1e-3);
+//! # Ok::<(), hearth_planning::space::SpaceError>(())
+//! ```
+
+mod compound;
+mod joint;
+mod se2;
+
+pub use compound::CompoundSpace;
+pub use joint::JointSpace;
+pub use se2::Se2Space;
+
+use std::f64::consts::PI;
+
+use hearth_kinematics::wrap_angle;
+use rand::{Rng, RngExt};
+
+/// A configuration space: where planner states live and how far apart they are.
+///
+/// States are `&[f64]` slices of length [`Space::dim`]. Every method but [`Space::check`] and
+/// [`Space::satisfies_bounds`] expects slices of exactly that length and checks it only in
+/// debug builds (these run millions of times per plan); validate foreign input, such as a
+/// problem file's start and goal, once with [`Space::check`]. None of the methods allocate.
+///
+/// [`Space::sample`] is generic over the random number generator, so the trait is not
+/// dyn-compatible: planners are generic over `S: Space`, which lets the compiler inline the
+/// per-coordinate loops of the concrete space (and of both halves of a [`CompoundSpace`])
+/// instead of paying a virtual call per state and per random number. A caller holding a
+/// `&mut dyn Rng` can still pass it, since `R` may be unsized.
+///
+/// ```
+/// use hearth_planning::space::{Se2Space, Space};
+///
+/// fn path_length<S: Space>(space: &S, path: &[Vec<f64>]) -> f64 {
+///     path.windows(2).map(|w| space.distance(&w[0], &w[1])).sum()
+/// }
+/// let base = Se2Space::new([0.0, 0.0], [10.0, 10.0])?;
+/// let path = vec![vec![0.0, 0.0, 0.0], vec![3.0, 4.0, 0.0]];
+/// assert_eq!(path_length(&base, &path), 5.0);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+pub trait Space: Send + Sync {
+    /// Number of coordinates of a state.
+    fn dim(&self) -> usize;
+
+    /// Writes a state drawn uniformly inside the bounds into `out` (continuous coordinates in
+    /// `[-π, π)`). The same generator state gives the same sample, bit for bit.
+    fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]);
+
+    /// The distance between two states: a metric (symmetric, zero on equal states, obeys the
+    /// triangle inequality), measured along the shortest way, so continuous coordinates are
+    /// compared modulo 2π.
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64;
+
+    /// Writes the state a fraction `t` of the way from `a` to `b` into `out`, along the
+    /// shortest way (continuous coordinates wrap through ±π when that is shorter).
+    ///
+    /// `t = 0` gives `a` and `t = 1` gives `b`, bit for bit; `t` outside `[0, 1]` is clamped.
+    /// `distance(a, interpolate(a, b, t)) = t · distance(a, b)` up to rounding, and the result
+    /// lies within the bounds when `a` and `b` do.
+    fn interpolate(&self, a: &[f64], b: &[f64], t: f64, out: &mut [f64]);
+
+    /// Lower bounds per coordinate (`-π` for continuous coordinates).
+    fn lower(&self) -> &[f64];
+
+    /// Upper bounds per coordinate (`π` for continuous coordinates).
+    fn upper(&self) -> &[f64];
+
+    /// Brings `q` into the bounds: bounded coordinates are clamped, continuous ones wrapped
+    /// into `(-π, π]`. NaN stays NaN.
+    fn enforce_bounds(&self, q: &mut [f64]);
+
+    /// Whether `q` has [`Space::dim`] coordinates, all within their bounds (inclusive;
+    /// continuous coordinates within `[-π, π]`). NaN is out of bounds.
+    fn satisfies_bounds(&self, q: &[f64]) -> bool;
+
+    /// Writes `b ⊖ a` into `out`: `b[i] - a[i]` per coordinate, wrapped into `(-π, π]` for
+    /// continuous ones, so that `a + difference` reaches `b` the short way. Shortcutting and
+    /// trajectory timing work on these per-coordinate displacements.
+    fn difference(&self, a: &[f64], b: &[f64], out: &mut [f64]);
+
+    /// Checks a state from outside (a problem file, a user): its length, that every coordinate
+    /// is a finite number and within the bounds. The error names the first bad coordinate.
+    fn check(&self, q: &[f64]) -> Result<(), SpaceError>;
+
+    /// The name of coordinate `i` (a joint name, `x`, `y`, `yaw`), or `None` past the end.
+    fn coordinate_name(&self, i: usize) -> Option<&str>;
+}
+
+/// What is wrong with a state, or with the description of a space.
+///
+/// ```
+/// use hearth_planning::space::{JointSpace, Space, SpaceError};
+///
+/// let space = JointSpace::new(&[-1.0], &[1.0], &[false])?;
+/// assert!(matches!(space.check(&[2.0]), Err(SpaceError::OutOfBounds { index: 0, .. })));
+/// assert!(matches!(space.check(&[f64::NAN]), Err(SpaceError::NotFinite { index: 0, .. })));
+/// assert!(matches!(JointSpace::new(&[1.0], &[-1.0], &[false]), Err(SpaceError::InvalidBounds { .. })));
+/// # Ok::<(), SpaceError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SpaceError {
+    /// A state or a per-coordinate list has the wrong number of entries.
+    #[error("{what} has {got} entries, the space has {expected} coordinates")]
+    DimensionMismatch {
+        /// What was too long or too short (`state`, `upper bounds`, `weights`, …).
+        what: &'static str,
+        /// The space's dimension.
+        expected: usize,
+        /// The number of entries given.
+        got: usize,
+    },
+    /// A coordinate of a state is NaN or infinite.
+    #[error("coordinate {index} ({name}) is {value}, not a finite number")]
+    NotFinite {
+        /// Index of the coordinate in the state.
+        index: usize,
+        /// Name of the coordinate.
+        name: String,
+        /// The value found.
+        value: f64,
+    },
+    /// A coordinate of a state lies outside its bounds.
+    #[error("coordinate {index} ({name}) is {value}, outside its bounds [{lower}, {upper}]")]
+    OutOfBounds {
+        /// Index of the coordinate in the state.
+        index: usize,
+        /// Name of the coordinate.
+        name: String,
+        /// The value found.
+        value: f64,
+        /// Its lower bound.
+        lower: f64,
+        /// Its upper bound.
+        upper: f64,
+    },
+    /// A space was described with unusable bounds (NaN, infinite, or lower above upper).
+    #[error("coordinate {index} ({name}) has bounds [{lower}, {upper}]: {why}")]
+    InvalidBounds {
+        /// Index of the coordinate.
+        index: usize,
+        /// Name of the coordinate.
+        name: String,
+        /// The lower bound given.
+        lower: f64,
+        /// The upper bound given.
+        upper: f64,
+        /// What is wrong with them.
+        why: &'static str,
+    },
+    /// A distance weight is negative, NaN or infinite.
+    #[error("weight of {what} is {value}; weights must be finite and non-negative")]
+    InvalidWeight {
+        /// Whose weight (a coordinate name, `yaw`, `first space`, …).
+        what: String,
+        /// The value given.
+        value: f64,
+    },
+    /// A velocity limit is not positive (NaN, zero or negative).
+    #[error("velocity limit of {name} is {value}; it must be positive (or +inf)")]
+    InvalidVelocityLimit {
+        /// Name of the coordinate.
+        name: String,
+        /// The value given.
+        value: f64,
+    },
+}
+
+impl SpaceError {
+    /// The same error with coordinate indices shifted by `by` (a sub-space's error reported
+    /// in the coordinates of the enclosing [`CompoundSpace`]).
+    fn offset(mut self, by: usize) -> Self {
+        match &mut self {
+            Self::NotFinite { index, .. } | Self::OutOfBounds { index, .. } | Self::InvalidBounds { index, .. } => {
+                *index += by
+            }
+            Self::DimensionMismatch { .. } | Self::InvalidWeight { .. } | Self::InvalidVelocityLimit { .. } => {}
+        }
+        self
+    }
+}
+
+/// Whether a weight is usable: finite and non-negative.
+fn valid_weight(w: f64) -> bool {
+    w.is_finite() && w >= 0.0
+}
+
+/// A uniform sample of `[lo, hi)` (`lo` when the interval is a point). Same formula as
+/// [`hearth_kinematics::Chain::random_configuration`], so both give the same values from the
+/// same generator.
+#[inline]
+fn sample_interval<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    let r: f64 = rng.random();
+    if hi > lo { (lo + (hi - lo) * r).min(hi) } else { lo }
+}
+
+/// `b ⊖ a` for one coordinate.
+#[inline(always)]
+fn coordinate_difference(continuous: bool, a: f64, b: f64) -> f64 {
+    if continuous { wrap_angle(b - a) } else { b - a }
+}
+
+/// One coordinate a fraction `t ∈ [0, 1]` of the way from `a` to `b`, the short way. The
+/// result of a bounded coordinate is kept between `a` and `b`, so rounding never leaves the
+/// bounds; a continuous one is wrapped into `(-π, π]`.
+#[inline(always)]
+fn coordinate_interpolate(continuous: bool, a: f64, b: f64, t: f64) -> f64 {
+    if continuous {
+        wrap_angle(a + t * wrap_angle(b - a))
+    } else {
+        (a + t * (b - a)).max(a.min(b)).min(a.max(b))
+    }
+}
+
+/// One coordinate brought into its bounds: clamped, or wrapped when continuous.
+#[inline(always)]
+fn coordinate_enforce(continuous: bool, x: f64, lo: f64, hi: f64) -> f64 {
+    if continuous { wrap_angle(x) } else { x.max(lo).min(hi) }
+}
+
+/// Checks a state against flat bounds; `name(i)` names coordinate `i` for the error.
+fn check_state<'a>(q: &[f64], lower: &[f64], upper: &[f64], name: impl Fn(usize) -> &'a str) -> Result<(), SpaceError> {
+    if q.len() != lower.len() {
+        return Err(SpaceError::DimensionMismatch {
+            what: "state",
+            expected: lower.len(),
+            got: q.len(),
+        });
+    }
+    for (index, ((&value, &lo), &hi)) in q.iter().zip(lower).zip(upper).enumerate() {
+        if !value.is_finite() {
+            return Err(SpaceError::NotFinite {
+                index,
+                name: name(index).to_owned(),
+                value,
+            });
+        }
+        if value < lo || value > hi {
+            return Err(SpaceError::OutOfBounds {
+                index,
+                name: name(index).to_owned(),
+                value,
+                lower: lo,
+                upper: hi,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Whether `q` has the right length and lies within flat bounds (NaN is out).
+#[inline]
+fn within(q: &[f64], lower: &[f64], upper: &[f64]) -> bool {
+    q.len() == lower.len()
+        && q.iter()
+            .zip(lower)
+            .zip(upper)
+            .all(|((&x, &lo), &hi)| x >= lo && x <= hi)
+}
+
+/// Validates the bounds of one coordinate of a bounded (non-continuous) kind.
+fn check_bounds(index: usize, name: &str, lower: f64, upper: f64) -> Result<(), SpaceError> {
+    let why = if lower.is_nan() || upper.is_nan() {
+        "a bound is NaN"
+    } else if lower.is_infinite() || upper.is_infinite() {
+        "a bounded coordinate needs finite bounds (mark it continuous if it wraps)"
+    } else if lower > upper {
+        "lower bound above upper bound"
+    } else {
+        return Ok(());
+    };
+    Err(SpaceError::InvalidBounds {
+        index,
+        name: name.to_owned(),
+        lower,
+        upper,
+        why,
+    })
+}
+
+/// Bounds of a continuous coordinate.
+const CONTINUOUS_BOUNDS: (f64, f64) = (-PI, PI);

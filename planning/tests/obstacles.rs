@@ -1,0 +1,343 @@
+//! `ParryScene` through the `Obstacles` seam: known poses, the cylinder axis convention,
+//! distances, ray casts, margin, and BVH results against a brute-force loop.
+
+use std::f32::consts::FRAC_PI_4;
+use std::sync::Arc;
+
+use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+use parry3d::math::{Pose, Real, Rotation, Vector};
+use parry3d::query;
+use parry3d::shape::{Ball, Cuboid};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+
+const BOX: ObstacleId = ObstacleId(0);
+const BALL: ObstacleId = ObstacleId(1);
+const POLE: ObstacleId = ObstacleId(2);
+
+/// A box turned 45° about z at (1, 0, 0.5), a ball at (-1, 0, 0.5), a thin pole along z at
+/// (0, 1, 0.5) spanning z ∈ [0, 1].
+fn fixture() -> ParryScene {
+    ParryScene::new(vec![
+        Obstacle::cuboid(
+            "box",
+            Pose::from_parts(Vector::new(1.0, 0.0, 0.5), Rotation::from_rotation_z(FRAC_PI_4)),
+            Vector::splat(0.2),
+        ),
+        Obstacle::ball("ball", Vector::new(-1.0, 0.0, 0.5), 0.25),
+        Obstacle::cylinder("pole", Pose::translation(0.0, 1.0, 0.5), 0.5, 0.02),
+    ])
+}
+
+fn point() -> Ball {
+    Ball::new(1e-3)
+}
+
+fn at(x: Real, y: Real, z: Real) -> Pose {
+    Pose::translation(x, y, z)
+}
+
+#[test]
+fn intersects_at_known_poses() {
+    let s = fixture();
+    assert_eq!(s.len(), 3);
+    // Box corner points along +x after the 45° turn: reaches x = 1 + 0.2·√2 ≈ 1.2828.
+    assert_eq!(s.first_hit(&point(), &at(1.27, 0.0, 0.5)), Some(BOX));
+    assert!(!s.intersects(&point(), &at(1.30, 0.0, 0.5)));
+    // The y corner (0.2828) reaches past an unturned box's 0.2 …
+    assert_eq!(s.first_hit(&point(), &at(1.0, 0.27, 0.69)), Some(BOX));
+    // … but not above its top face.
+    assert!(!s.intersects(&point(), &at(1.0, 0.27, 0.71)));
+    assert_eq!(s.first_hit(&point(), &at(-1.0, 0.0, 0.74)), Some(BALL));
+    assert!(!s.intersects(&point(), &at(-1.0, 0.0, 0.76)));
+    assert!(!s.intersects(&point(), &at(0.0, 0.0, 0.0)));
+    assert!(!s.intersects(&point(), &at(5.0, 5.0, 5.0)));
+    // A shape straddling two obstacles reports one of them.
+    let big = Cuboid::new(Vector::new(1.5, 0.05, 0.05));
+    let hit = s.first_hit(&big, &at(0.0, 0.0, 0.5)).unwrap();
+    assert!(hit == BOX || hit == BALL);
+}
+
+#[test]
+fn cylinder_axis_is_local_z() {
+    let s = fixture();
+    // Above the centre, inside the span z ∈ [0, 1].
+    assert_eq!(s.first_hit(&point(), &at(0.0, 1.0, 0.9)), Some(POLE));
+    assert_eq!(s.first_hit(&point(), &at(0.0, 1.0, 0.05)), Some(POLE));
+    // Beside the centre (would be inside if the axis were x or y).
+    assert!(!s.intersects(&point(), &at(0.2, 1.0, 0.5)));
+    assert!(!s.intersects(&point(), &at(0.0, 1.3, 0.5)));
+    // Beyond the flat cap.
+    assert!(!s.intersects(&point(), &at(0.0, 1.0, 1.01)));
+    let aabb = s.get(POLE).unwrap().aabb();
+    assert!((aabb.mins.z - 0.0).abs() < 1e-5 && (aabb.maxs.z - 1.0).abs() < 1e-5);
+    assert!((aabb.maxs.x - 0.02).abs() < 1e-5);
+
+    // A tilted cylinder: axis z turned 90° about x now lies along -y.
+    let tilted = ParryScene::new(vec![Obstacle::cylinder(
+        "tilted",
+        Pose::from_parts(Vector::ZERO, Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2)),
+        0.5,
+        0.02,
+    )]);
+    assert!(tilted.intersects(&point(), &at(0.0, 0.4, 0.0)));
+    assert!(!tilted.intersects(&point(), &at(0.0, 0.0, 0.4)));
+}
+
+#[test]
+fn distance_values() {
+    let s = fixture();
+    let probe = Ball::new(0.1);
+    // Above the ball: 0.5 - 0.25 - 0.1.
+    let (d, id) = s.distance(&probe, &at(-1.0, 0.0, 1.0), 1.0).unwrap();
+    assert_eq!(id, BALL);
+    assert!((d - 0.15).abs() < 1e-5, "{d}");
+    assert_eq!(s.distance(&probe, &at(-1.0, 0.0, 1.0), 0.1), None);
+    // Beside the pole: 0.5 - 0.02 - 0.1, nearer than anything else.
+    let (d, id) = s.distance(&probe, &at(0.0, 1.5, 0.5), 10.0).unwrap();
+    assert_eq!(id, POLE);
+    assert!((d - 0.38).abs() < 1e-5, "{d}");
+    // Touching gives 0.
+    let (d, id) = s.distance(&probe, &at(1.0, 0.0, 0.5), 1.0).unwrap();
+    assert_eq!((d, id), (0.0, BOX));
+    // max_dist is inclusive enough to find a hit right at the bound.
+    assert!(s.distance(&probe, &at(-1.0, 0.0, 1.0), 0.1501).is_some());
+    assert_eq!(s.distance(&probe, &at(-1.0, 0.0, 1.0), -1.0), None);
+}
+
+#[test]
+fn ray_cast_hits_the_nearest_obstacle() {
+    let s = fixture();
+    let (t, id) = s.cast_ray(Vector::new(-3.0, 0.0, 0.5), Vector::X, 10.0).unwrap();
+    assert_eq!(id, BALL);
+    assert!((t - 1.75).abs() < 1e-5, "{t}");
+    let (t, id) = s.cast_ray(Vector::new(3.0, 0.0, 0.5), -Vector::X, 10.0).unwrap();
+    assert_eq!(id, BOX);
+    assert!((t - (2.0 - 0.2 * 2f32.sqrt())).abs() < 1e-5, "{t}");
+    let (t, id) = s.cast_ray(Vector::new(0.0, 3.0, 0.5), -Vector::Y, 10.0).unwrap();
+    assert_eq!(id, POLE);
+    assert!((t - 1.98).abs() < 1e-5, "{t}");
+    // Time of impact in units of |dir|.
+    let (t, _) = s
+        .cast_ray(Vector::new(-3.0, 0.0, 0.5), Vector::new(2.0, 0.0, 0.0), 10.0)
+        .unwrap();
+    assert!((t - 0.875).abs() < 1e-5, "{t}");
+    // Too short, missing, degenerate.
+    assert_eq!(s.cast_ray(Vector::new(-3.0, 0.0, 0.5), Vector::X, 1.7), None);
+    assert_eq!(s.cast_ray(Vector::new(-3.0, 0.0, 3.0), Vector::X, 10.0), None);
+    assert_eq!(s.cast_ray(Vector::new(-3.0, 0.0, 0.5), Vector::ZERO, 10.0), None);
+    assert_eq!(
+        s.cast_ray(Vector::new(-3.0, 0.0, 0.5), Vector::new(Real::NAN, 0.0, 0.0), 10.0),
+        None
+    );
+    // From inside: 0.
+    let (t, id) = s.cast_ray(Vector::new(-1.0, 0.0, 0.5), Vector::Z, 10.0).unwrap();
+    assert_eq!((t, id), (0.0, BALL));
+}
+
+#[test]
+fn margin_inflates_intersection_tests() {
+    let probe = Ball::new(0.1);
+    // 0.03 m of clearance above the ball.
+    let pose = at(-1.0, 0.0, 0.5 + 0.25 + 0.1 + 0.03);
+    assert!(!fixture().intersects(&probe, &pose));
+    assert!(!fixture().with_margin(0.01).intersects(&probe, &pose));
+    let s = fixture().with_margin(0.05);
+    assert_eq!(s.margin(), 0.05);
+    assert_eq!(s.first_hit(&probe, &pose), Some(BALL));
+    // Distance ignores the margin.
+    let (d, _) = s.distance(&probe, &pose, 1.0).unwrap();
+    assert!((d - 0.03).abs() < 1e-5);
+    assert_eq!(fixture().with_margin(-1.0).margin(), 0.0);
+    assert_eq!(fixture().with_margin(Real::NAN).margin(), 0.0);
+}
+
+#[test]
+fn bounds_names_and_empty_scene() {
+    let s = fixture();
+    let aabb = s.aabb().unwrap();
+    assert!((aabb.mins.x - -1.25).abs() < 1e-5);
+    assert!((aabb.maxs.y - 1.02).abs() < 1e-5);
+    assert!((aabb.maxs.z - 1.0).abs() < 1e-5);
+    assert_eq!(s.name(POLE), Some("pole"));
+    assert_eq!(s.name(ObstacleId(7)), None);
+    assert_eq!(s.find("ball"), Some(BALL));
+
+    let empty = ParryScene::default();
+    assert!(empty.is_empty());
+    assert_eq!(empty.aabb(), None);
+    assert!(!empty.intersects(&point(), &Pose::IDENTITY));
+    assert_eq!(empty.distance(&point(), &Pose::IDENTITY, 100.0), None);
+    assert_eq!(empty.cast_ray(Vector::ZERO, Vector::X, 100.0), None);
+
+    let one = ParryScene::new(vec![Obstacle::ball("only", Vector::ZERO, 1.0)]);
+    assert_eq!(one.first_hit(&point(), &Pose::IDENTITY), Some(ObstacleId(0)));
+    assert_eq!(
+        one.distance(&point(), &at(3.0, 0.0, 0.0), 5.0).map(|(_, id)| id),
+        Some(ObstacleId(0))
+    );
+    assert_eq!(
+        one.cast_ray(Vector::new(-3.0, 0.0, 0.0), Vector::X, 5.0)
+            .map(|(t, _)| t),
+        Some(2.0)
+    );
+}
+
+#[test]
+fn other_shapes_capsule_convex_trimesh() {
+    let floor = Obstacle::trimesh(
+        "floor",
+        Pose::IDENTITY,
+        vec![
+            Vector::new(-5.0, -5.0, 0.0),
+            Vector::new(5.0, -5.0, 0.0),
+            Vector::new(0.0, 5.0, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    let tetra = Obstacle::convex_hull(
+        "tetra",
+        Pose::translation(0.0, 0.0, 2.0),
+        &[Vector::ZERO, Vector::X, Vector::Y, Vector::Z],
+    )
+    .unwrap();
+    let capsule = Obstacle::capsule("capsule", Vector::new(3.0, 0.0, 1.0), Vector::new(3.0, 0.0, 2.0), 0.1);
+    assert!(Obstacle::convex_hull("none", Pose::IDENTITY, &[]).is_none());
+    assert!(Obstacle::trimesh("none", Pose::IDENTITY, vec![], vec![]).is_err());
+
+    let s = ParryScene::new(vec![floor, tetra, capsule]);
+    let probe = Ball::new(0.05);
+    assert_eq!(s.first_hit(&probe, &at(0.0, 0.0, 0.04)), Some(ObstacleId(0)));
+    assert!(!s.intersects(&probe, &at(0.0, 0.0, 0.06)));
+    assert_eq!(s.first_hit(&probe, &at(0.1, 0.1, 2.1)), Some(ObstacleId(1)));
+    assert_eq!(s.first_hit(&probe, &at(3.0, 0.0, 2.14)), Some(ObstacleId(2)));
+    assert!(!s.intersects(&probe, &at(3.0, 0.0, 2.16)));
+    let (t, id) = s.cast_ray(Vector::new(0.2, 0.2, 5.0), -Vector::Z, 10.0).unwrap();
+    assert_eq!(id, ObstacleId(1));
+    assert!((t - (5.0 - 2.6)).abs() < 1e-5, "{t}");
+}
+
+#[test]
+fn object_safe_and_shareable() {
+    let shared: Arc<dyn Obstacles> = Arc::new(fixture());
+    let worker = {
+        let shared = Arc::clone(&shared);
+        std::thread::spawn(move || shared.intersects(&point(), &at(-1.0, 0.0, 0.5)))
+    };
+    assert!(worker.join().unwrap());
+    assert_eq!(shared.name(BALL), Some("ball"));
+}
+
+/// A random scene of boxes, balls, cylinders and capsules.
+fn random_scene(rng: &mut Pcg64, n: usize) -> ParryScene {
+    let mut v = || {
+        Vector::new(
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+            rng.random_range(0.0..2.0),
+        )
+    };
+    let centers: Vec<Vector> = (0..n).map(|_| v()).collect();
+    centers
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let rot = Rotation::from_rotation_z(i as Real * 0.7) * Rotation::from_rotation_x(i as Real * 0.3);
+            let pose = Pose::from_parts(c, rot);
+            match i % 4 {
+                0 => Obstacle::cuboid(format!("box{i}"), pose, Vector::new(0.1, 0.2, 0.05 + 0.01 * i as Real)),
+                1 => Obstacle::ball(format!("ball{i}"), c, 0.05 + 0.005 * i as Real),
+                2 => Obstacle::cylinder(format!("cyl{i}"), pose, 0.3, 0.03),
+                _ => Obstacle::capsule(format!("cap{i}"), c, c + Vector::new(0.2, 0.1, 0.3), 0.04),
+            }
+        })
+        .collect()
+}
+
+fn brute_distance(s: &ParryScene, shape: &Ball, pose: &Pose) -> Real {
+    s.obstacles()
+        .iter()
+        .map(|o| query::distance(pose, shape, &o.pose, &*o.shape).unwrap().distance)
+        .fold(Real::INFINITY, Real::min)
+}
+
+#[test]
+fn bvh_matches_brute_force_on_random_ball_queries() {
+    let mut rng = Pcg64::seed_from_u64(7);
+    let scene = random_scene(&mut rng, 60);
+    let margins = [0.0, 0.05];
+    let (mut hits, mut misses) = (0, 0);
+    for k in 0..1000 {
+        let radius: Real = rng.random_range(0.01..0.3);
+        let c = Vector::new(
+            rng.random_range(-2.5..2.5),
+            rng.random_range(-2.5..2.5),
+            rng.random_range(-0.5..2.5),
+        );
+        let ball = Ball::new(radius);
+        let pose = Pose::from_translation(c);
+        let margin = margins[k % 2];
+        let s = scene.clone().with_margin(margin);
+
+        let brute: Vec<usize> = s
+            .obstacles()
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| {
+                let d = query::distance(&pose, &ball, &o.pose, &*o.shape).unwrap().distance;
+                if margin > 0.0 {
+                    d <= margin
+                } else {
+                    query::intersection_test(&pose, &ball, &o.pose, &*o.shape)
+                        .unwrap()
+                        .intersecting
+                }
+            })
+            .map(|(i, _)| i)
+            .collect();
+        match s.first_hit(&ball, &pose) {
+            Some(id) => {
+                assert!(brute.contains(&id.index()), "query {k}: {id} not in {brute:?}");
+                hits += 1;
+            }
+            None => {
+                assert!(brute.is_empty(), "query {k}: BVH missed {brute:?}");
+                misses += 1;
+            }
+        }
+
+        let best = brute_distance(&s, &ball, &pose);
+        let max_dist = 0.5;
+        match s.distance(&ball, &pose, max_dist) {
+            Some((d, id)) => {
+                assert!((d - best).abs() < 1e-5, "query {k}: {d} vs {best}");
+                let o = s.get(id).unwrap();
+                let did = query::distance(&pose, &ball, &o.pose, &*o.shape).unwrap().distance;
+                assert!((did - best).abs() < 1e-5);
+            }
+            None => assert!(best > max_dist, "query {k}: missed distance {best}"),
+        }
+
+        let dir = Vector::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let ray = query::Ray::new(c, dir);
+        let brute_ray = s
+            .obstacles()
+            .iter()
+            .filter_map(|o| parry3d::query::RayCast::cast_ray(&*o.shape, &o.pose, &ray, 3.0, true))
+            .fold(None, |m: Option<Real>, t| Some(m.map_or(t, |m| m.min(t))));
+        let bvh_ray = s.cast_ray(c, dir, 3.0).map(|(t, _)| t);
+        match (bvh_ray, brute_ray) {
+            (Some(a), Some(b)) => assert!((a - b).abs() < 1e-5, "query {k}: ray {a} vs {b}"),
+            (a, b) => assert_eq!(a, b, "query {k}: ray"),
+        }
+    }
+    assert!(
+        hits > 50 && misses > 50,
+        "degenerate test: {hits} hits, {misses} misses"
+    );
+}
