@@ -7,6 +7,8 @@
 //!   with bounded and continuous joints, SE(2) bases, and compound base + arm spaces.
 //! - [`obstacles`]: the [`Obstacles`] seam ("does this shape at this pose touch anything?",
 //!   distance, ray cast) and [`ParryScene`], its static implementation over a parry BVH.
+//! - [`validity`]: [`StateValidator`] and the exact [`RobotValidity`] (FK + links vs obstacles
+//!   + self-collision + attached objects); [`motion`]: edges checked midpoint-first.
 //! - [`problem`]: benchmark problem files (MotionBenchMaker JSON).
 //!
 //! ```
@@ -18,9 +20,13 @@
 /// The kinematics crate this one builds on.
 pub use hearth_kinematics as kinematics;
 
+pub mod motion;
 pub mod obstacles;
 pub mod problem;
 pub mod space;
+pub mod validity;
 
+pub use motion::MotionValidator;
 pub use obstacles::{Obstacles, ParryScene};
 pub use space::Space;
+pub use validity::{RobotValidity, StateValidator};
