@@ -42,9 +42,18 @@ fn state_validity(c: &mut Criterion) {
             black_box(v.is_valid(black_box(&qs[k])))
         })
     });
+    c.bench_function("state_validity/panda_table_pick_random_exact", |b| {
+        b.iter(|| {
+            k = (k + 1) & 255;
+            black_box(v.is_valid_exact(black_box(&qs[k])))
+        })
+    });
     let start = problem.start.clone();
     c.bench_function("state_validity/panda_table_pick_start", |b| {
         b.iter(|| black_box(v.is_valid(black_box(&start))))
+    });
+    c.bench_function("state_validity/panda_table_pick_start_exact", |b| {
+        b.iter(|| black_box(v.is_valid_exact(black_box(&start))))
     });
 }
 

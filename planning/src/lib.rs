@@ -9,6 +9,9 @@
 //!   distance, ray cast) and [`ParryScene`], its static implementation over a parry BVH.
 //! - [`validity`]: [`StateValidator`] and the exact [`RobotValidity`] (FK + links vs obstacles
 //!   + self-collision + attached objects); [`motion`]: edges checked midpoint-first.
+//! - [`planner`]: the [`Planner`] trait, [`PlanRequest`], [`Budget`], [`Solution`]; planners
+//!   [`Rrt`], [`BiRrt`] (RRT-Connect) and [`LazyPrm`], failing with a typed [`PlanError`];
+//!   [`nn`]: exact nearest-neighbour search under any space's metric.
 //! - [`problem`]: benchmark problem files (MotionBenchMaker JSON).
 //!
 //! ```
@@ -20,13 +23,25 @@
 /// The kinematics crate this one builds on.
 pub use hearth_kinematics as kinematics;
 
+pub mod birrt;
+pub mod error;
+pub mod lazy_prm;
 pub mod motion;
+pub mod nn;
 pub mod obstacles;
+pub mod planner;
 pub mod problem;
+pub mod rrt;
 pub mod space;
 pub mod validity;
 
+pub use birrt::BiRrt;
+pub use error::PlanError;
+pub use lazy_prm::{LazyPrm, LazyPrmSettings};
 pub use motion::MotionValidator;
+pub use nn::NearestNeighbors;
 pub use obstacles::{Obstacles, ParryScene};
+pub use planner::{Budget, Goal, Path, PlanRequest, PlanStats, Planner, Solution};
+pub use rrt::Rrt;
 pub use space::Space;
 pub use validity::{RobotValidity, StateValidator};

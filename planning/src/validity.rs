@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
-use nalgebra::Isometry3;
-use parry3d::shape::SharedShape;
+use nalgebra::{Isometry3, Point3};
+use parry3d::math::{Pose, Vector};
+use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{ObstacleId, Obstacles};
 
@@ -92,6 +93,144 @@ pub struct RobotValidity {
     q_full: Vec<f64>,
     poses: Vec<Isometry3<f64>>,
     checks: u64,
+    broad: BroadPhase,
+}
+
+/// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
+/// tolerances can never make the broad phase prune a pair that the exact test reports.
+const BOUND_SLACK_ABS: f64 = 1e-4;
+/// Relative slack added to every bounding radius (same purpose).
+const BOUND_SLACK_REL: f64 = 1e-3;
+
+/// How many consecutive geometric links share one enclosing ball in the obstacle pre-test.
+const OBSTACLE_GROUP: usize = 4;
+
+/// Conservative broad phase: one bounding sphere per link with geometry (in the link frame,
+/// slightly inflated), used to skip exact tests that provably cannot report contact.
+///
+/// * Against obstacles: if the link's bounding ball touches nothing (asked through
+///   [`Obstacles::first_hit`], so any margin the implementation applies is honoured), the link
+///   shape, which lies inside the ball, touches nothing either.
+/// * Self-collision: if two links' balls are apart, the links are apart.
+///
+/// Nothing is cached across calls except which check failed last (tried first next time), so
+/// moving obstacles stay correct and answers are exactly the exact-geometry answers.
+struct BroadPhase {
+    /// Per link (indexed by link id): centre of the bounding sphere in the link frame.
+    local_center: Vec<Point3<f64>>,
+    /// Groups of consecutive geometric links (indices into `geometric`) tested against the
+    /// obstacles with one enclosing ball first.
+    groups: Vec<std::ops::Range<usize>>,
+    /// Per link: inflated bounding radius (0 for links without geometry).
+    radius: Vec<f64>,
+    /// Per geometric link (same order as `RobotValidity::geometric`): the bounding ball.
+    balls: Vec<Ball>,
+    /// Per checked pair: squared sum of the two radii.
+    pair_reach2: Vec<f64>,
+    /// Per link: range into `parts` of its parts' bounding spheres (one for a non-compound).
+    part_range: Vec<std::ops::Range<usize>>,
+    /// Bounding spheres of every link's parts: centre in the link frame and inflated radius.
+    parts: Vec<(Point3<f64>, f64)>,
+    /// World centres of `parts` for the current configuration, filled lazily per link.
+    parts_world: Vec<Point3<f64>>,
+    /// Per link: the value of `epoch` when its `parts_world` were last filled.
+    parts_epoch: Vec<u64>,
+    /// Incremented per check.
+    epoch: u64,
+    /// Scratch lists of part indices near the other link (reused, no allocation per check).
+    near_a: Vec<usize>,
+    near_b: Vec<usize>,
+    /// `near_b`'s part spheres as f32 structure-of-arrays, centres relative to link `a`'s
+    /// sphere centre (so values stay small and f32 rounding stays far below the slack):
+    /// x, y, z, radius.
+    near_soa: [Vec<f32>; 4],
+    /// Per link: world centre of the bounding sphere for the current configuration.
+    world_center: Vec<Point3<f64>>,
+    /// The check that failed last, tried first.
+    hint: Hint,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hint {
+    None,
+    Link(usize),
+    Pair(usize),
+}
+
+impl BroadPhase {
+    fn new(model: &RobotModel, geometric: &[usize], pairs: &[(usize, usize)]) -> Self {
+        let n = model.links().len();
+        let mut local_center = vec![Point3::origin(); n];
+        let mut radius = vec![0.0; n];
+        let mut balls = Vec::with_capacity(geometric.len());
+        let mut part_range = vec![0..0; n];
+        let mut parts = Vec::new();
+        let inflate = |r: f32| {
+            let r = f64::from(r);
+            if r.is_finite() {
+                r * (1.0 + BOUND_SLACK_REL) + BOUND_SLACK_ABS
+            } else {
+                f64::INFINITY
+            }
+        };
+        let p64 = |c: Vector| Point3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
+        for &l in geometric {
+            let s = model.link_shape(l).expect("geometric link has a shape");
+            let start = parts.len();
+            if let Some(compound) = s.shape.as_compound() {
+                for (pose, part) in compound.shapes() {
+                    let bs = part.compute_bounding_sphere(pose);
+                    parts.push((s.origin * p64(bs.center()), inflate(bs.radius())));
+                }
+            } else {
+                let bs = s.shape.compute_local_bounding_sphere();
+                parts.push((s.origin * p64(bs.center()), inflate(bs.radius())));
+            }
+            part_range[l] = start..parts.len();
+            let bs = s.shape.compute_local_bounding_sphere();
+            let c = bs.center();
+            let c = Point3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
+            local_center[l] = s.origin * c;
+            // The smaller of the shape's own bounding sphere and a sphere around the parts'
+            // (inflated) spheres; both contain the whole shape.
+            let around_parts = parts[start..]
+                .iter()
+                .map(|(pc, pr)| (pc - local_center[l]).norm() + pr)
+                .fold(0.0f64, f64::max);
+            let r = inflate(bs.radius()).min(around_parts * (1.0 + 1e-9) + 1e-9);
+            radius[l] = r;
+            balls.push(Ball::new(if r.is_finite() { r as f32 } else { f32::MAX }));
+        }
+        let pair_reach2 = pairs
+            .iter()
+            .map(|&(a, b)| {
+                let s = radius[a] + radius[b];
+                s * s
+            })
+            .collect();
+        let n_parts = parts.len();
+        let groups = (0..geometric.len())
+            .step_by(OBSTACLE_GROUP)
+            .map(|g| g..(g + OBSTACLE_GROUP).min(geometric.len()))
+            .collect();
+        Self {
+            groups,
+            local_center,
+            radius,
+            balls,
+            pair_reach2,
+            part_range,
+            parts,
+            parts_world: vec![Point3::origin(); n_parts],
+            parts_epoch: vec![u64::MAX; n],
+            epoch: 0,
+            near_a: Vec::with_capacity(n_parts),
+            near_b: Vec::with_capacity(n_parts),
+            near_soa: std::array::from_fn(|_| Vec::with_capacity(n_parts)),
+            world_center: vec![Point3::origin(); n],
+            hint: Hint::None,
+        }
+    }
 }
 
 impl RobotValidity {
@@ -100,11 +239,13 @@ impl RobotValidity {
     /// the world origin (see [`RobotValidity::set_base`]).
     pub fn new(chain: Chain, matrix: SelfCollisionMatrix, obstacles: Arc<dyn Obstacles>) -> Self {
         let model = chain.model().clone();
-        let geometric = (0..model.links().len())
+        let geometric: Vec<usize> = (0..model.links().len())
             .filter(|&l| model.link_shape(l).is_some())
             .collect();
         let pairs = matrix.checked_geometric_pairs(&model);
+        let broad = BroadPhase::new(&model, &geometric, &pairs);
         Self {
+            broad,
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -159,6 +300,189 @@ impl RobotValidity {
         let s = self.model.link_shape(l)?;
         let pose = to_pose(&(self.poses[l] * s.origin));
         self.obstacles.first_hit(s.shape.as_ref(), &pose)
+    }
+
+    /// World centres of the links' bounding spheres for the current poses.
+    fn update_centers(&mut self) {
+        let b = &mut self.broad;
+        b.epoch = b.epoch.wrapping_add(1);
+        for &l in &self.geometric {
+            b.world_center[l] = self.poses[l] * b.local_center[l];
+        }
+    }
+
+    /// Whether the ball enclosing the bounding spheres of geometric links `range` touches any
+    /// obstacle (if not, none of those links can).
+    fn group_may_hit(&self, range: std::ops::Range<usize>) -> bool {
+        let b = &self.broad;
+        let n = range.len() as f64;
+        let mut c = nalgebra::Vector3::zeros();
+        for i in range.clone() {
+            c += b.world_center[self.geometric[i]].coords;
+        }
+        let c = Point3::from(c / n);
+        let mut r = 0.0f64;
+        for i in range {
+            let l = self.geometric[i];
+            r = r.max((b.world_center[l] - c).norm() + b.radius[l]);
+        }
+        if !r.is_finite() {
+            return true;
+        }
+        let ball = Ball::new((r * (1.0 + 1e-6) + 1e-6) as f32);
+        let pose = Pose::from_translation(Vector::new(c.x as f32, c.y as f32, c.z as f32));
+        self.obstacles.first_hit(&ball, &pose).is_some()
+    }
+
+    /// Broad phase + exact test of geometric link number `i` against the obstacles.
+    #[inline]
+    fn link_blocked(&self, i: usize) -> bool {
+        let l = self.geometric[i];
+        let c = &self.broad.world_center[l];
+        if self.broad.radius[l].is_finite() {
+            let pose = Pose::from_translation(Vector::new(c.x as f32, c.y as f32, c.z as f32));
+            if self.obstacles.first_hit(&self.broad.balls[i], &pose).is_none() {
+                return false;
+            }
+        }
+        self.link_hits(l).is_some()
+    }
+
+    /// World centres of link `l`'s part spheres, computed once per check.
+    fn part_centers(&mut self, l: usize) {
+        let b = &mut self.broad;
+        if b.parts_epoch[l] != b.epoch {
+            b.parts_epoch[l] = b.epoch;
+            let pose = &self.poses[l];
+            for k in b.part_range[l].clone() {
+                b.parts_world[k] = pose * b.parts[k].0;
+            }
+        }
+    }
+
+    /// Broad phase + exact test of checked self-collision pair number `i`.
+    #[inline]
+    fn pair_blocked(&mut self, i: usize) -> bool {
+        let (a, b) = self.pairs[i];
+        let d2 = (self.broad.world_center[a] - self.broad.world_center[b]).norm_squared();
+        if d2 > self.broad.pair_reach2[i] {
+            return false;
+        }
+        // Second level: every part sphere of `a` against every part sphere of `b`.
+        self.part_centers(a);
+        self.part_centers(b);
+        let bp = &mut self.broad;
+        // Parts of one link near the other link's whole sphere, then those part pairs.
+        let near = |bp: &BroadPhase, l: usize, other: usize, out: &mut Vec<usize>| {
+            out.clear();
+            let (co, ro) = (bp.world_center[other], bp.radius[other]);
+            for k in bp.part_range[l].clone() {
+                let r = bp.parts[k].1 + ro;
+                if (bp.parts_world[k] - co).norm_squared() <= r * r {
+                    out.push(k);
+                }
+            }
+        };
+        let mut near_a = std::mem::take(&mut bp.near_a);
+        let mut near_b = std::mem::take(&mut bp.near_b);
+        near(bp, a, b, &mut near_a);
+        let mut close = false;
+        if !near_a.is_empty() {
+            near(bp, b, a, &mut near_b);
+            // All near part pairs, vectorised over `b`'s parts in f32 (relative coordinates,
+            // errors ~1e-7 m against a slack of 1e-4 m per radius).
+            let origin = bp.world_center[a];
+            let [xs, ys, zs, rs] = &mut bp.near_soa;
+            for v in [&mut *xs, &mut *ys, &mut *zs, &mut *rs] {
+                v.clear();
+            }
+            for &kb in &near_b {
+                let d = bp.parts_world[kb] - origin;
+                xs.push(d.x as f32);
+                ys.push(d.y as f32);
+                zs.push(d.z as f32);
+                rs.push(bp.parts[kb].1 as f32);
+            }
+            close = near_a.iter().any(|&ka| {
+                let d = bp.parts_world[ka] - origin;
+                let (ax, ay, az, ra) = (d.x as f32, d.y as f32, d.z as f32, bp.parts[ka].1 as f32);
+                let mut hit = false;
+                for j in 0..xs.len() {
+                    let (dx, dy, dz, r) = (xs[j] - ax, ys[j] - ay, zs[j] - az, rs[j] + ra);
+                    hit |= dx * dx + dy * dy + dz * dz <= r * r;
+                }
+                hit
+            });
+        }
+        bp.near_a = near_a;
+        bp.near_b = near_b;
+        close && links_touch(&self.model, &self.poses, a, b)
+    }
+
+    /// The robot's own links (obstacles and self-collision), hint first.
+    fn robot_blocked(&mut self) -> bool {
+        self.update_centers();
+        let first = match self.broad.hint {
+            Hint::Link(i) => self.link_blocked(i),
+            Hint::Pair(i) => self.pair_blocked(i),
+            Hint::None => false,
+        };
+        if first {
+            return true;
+        }
+        let skip = self.broad.hint;
+        for g in 0..self.broad.groups.len() {
+            let range = self.broad.groups[g].clone();
+            if range.len() > 1 && !self.group_may_hit(range.clone()) {
+                continue;
+            }
+            for i in range {
+                if skip != Hint::Link(i) && self.link_blocked(i) {
+                    self.broad.hint = Hint::Link(i);
+                    return true;
+                }
+            }
+        }
+        for i in 0..self.pairs.len() {
+            if skip != Hint::Pair(i) && self.pair_blocked(i) {
+                self.broad.hint = Hint::Pair(i);
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The reference check without any broad phase (every link against the obstacles, every
+    /// checked pair with the exact test). Same answer as [`StateValidator::is_valid`], slower;
+    /// for tests and benchmarks. Does not count as a check.
+    pub fn is_valid_exact(&mut self, q: &[f64]) -> bool {
+        if !q.iter().all(|v| v.is_finite()) || !self.update_poses(q) {
+            return false;
+        }
+        if self.geometric.iter().any(|&l| self.link_hits(l).is_some()) {
+            return false;
+        }
+        if self
+            .pairs
+            .iter()
+            .any(|&(a, b)| links_touch(&self.model, &self.poses, a, b))
+        {
+            return false;
+        }
+        !self.attached_blocked()
+    }
+
+    fn attached_blocked(&self) -> bool {
+        for a in &self.attached {
+            let pose = to_pose(&(self.poses[a.link] * a.offset));
+            if self.obstacles.intersects(a.shape.as_ref(), &pose) {
+                return true;
+            }
+            if self.geometric.iter().any(|&l| self.attached_touches_link(a, l)) {
+                return true;
+            }
+        }
+        false
     }
 
     fn attached_touches_link(&self, a: &Attached, l: usize) -> bool {
@@ -221,26 +545,7 @@ impl StateValidator for RobotValidity {
         if !q.iter().all(|v| v.is_finite()) || !self.update_poses(q) {
             return false;
         }
-        if self.geometric.iter().any(|&l| self.link_hits(l).is_some()) {
-            return false;
-        }
-        if self
-            .pairs
-            .iter()
-            .any(|&(a, b)| links_touch(&self.model, &self.poses, a, b))
-        {
-            return false;
-        }
-        for a in &self.attached {
-            let pose = to_pose(&(self.poses[a.link] * a.offset));
-            if self.obstacles.intersects(a.shape.as_ref(), &pose) {
-                return false;
-            }
-            if self.geometric.iter().any(|&l| self.attached_touches_link(a, l)) {
-                return false;
-            }
-        }
-        true
+        !self.robot_blocked() && !self.attached_blocked()
     }
 
     fn checks(&self) -> u64 {

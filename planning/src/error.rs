@@ -1,0 +1,77 @@
+//! [`PlanError`]: why a planner returned no path.
+
+use crate::planner::{PlanRequest, PlanStats};
+
+/// Why a planner returned no path, OMPL's `INVALID_START`, `INVALID_GOAL` and `TIMEOUT`
+/// statuses as a typed error.
+///
+/// Planners only see a [`StateValidator`](crate::validity::StateValidator), which says *whether*
+/// a state is valid, not *why*; fill in the colliding pair with [`PlanError::explain_with`] and,
+/// for a robot, [`RobotValidity::explain`](crate::validity::RobotValidity::explain).
+///
+/// ```
+/// use hearth_planning::error::PlanError;
+/// use hearth_planning::planner::{Goal, PlanRequest};
+///
+/// let request = PlanRequest::new(vec![0.5, 0.5], Goal::Config(vec![0.9, 0.9]));
+/// let e = PlanError::InvalidStart { contact: None }
+///     .explain_with(&request, |q| (q[0] == 0.5).then(|| "link `hand` touches obstacle `wall`".to_owned()));
+/// assert!(e.to_string().contains("wall"));
+/// ```
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// The start state is in collision.
+    #[error("the start state is invalid{}", describe(contact))]
+    InvalidStart {
+        /// What it touches, when known.
+        contact: Option<String>,
+    },
+    /// Every goal state is in collision.
+    #[error("all {count} goal state(s) are invalid{}", describe(first_contact))]
+    InvalidGoals {
+        /// Number of goal states given.
+        count: usize,
+        /// What the first goal touches, when known.
+        first_contact: Option<String>,
+    },
+    /// The budget ran out before a path was found.
+    #[error(
+        "no path within the budget ({} iterations, {} states and {} motions checked, {:.3} s)",
+        stats.iterations, stats.states_checked, stats.motions_checked, stats.time.as_secs_f64()
+    )]
+    Timeout {
+        /// What the planner did meanwhile.
+        stats: PlanStats,
+    },
+    /// The request, budget or planner settings are unusable (wrong dimension, NaN, out of
+    /// bounds, no goal, no budget, a non-positive range, …); the message names the culprit,
+    /// such as `goal 2: coordinate 3 (panda_joint4) is 4.1, outside [-3.07, -0.07]` from
+    /// [`Space::check`](crate::space::Space::check).
+    #[error("bad input: {0}")]
+    BadInput(String),
+}
+
+fn describe(contact: &Option<String>) -> String {
+    contact.as_ref().map(|c| format!(": {c}")).unwrap_or_default()
+}
+
+impl PlanError {
+    /// The same error with the contact of an invalid start, or of the first goal, filled in
+    /// by `explain` (which returns `None` for a valid state). Other errors pass through.
+    pub fn explain_with(mut self, request: &PlanRequest, mut explain: impl FnMut(&[f64]) -> Option<String>) -> Self {
+        match &mut self {
+            PlanError::InvalidStart { contact } => *contact = explain(&request.start),
+            PlanError::InvalidGoals { first_contact, .. } => {
+                *first_contact = request.goal.states().first().and_then(|g| explain(g))
+            }
+            _ => {}
+        }
+        self
+    }
+}
+
+/// A [`Space::check`](crate::space::Space::check) failure of the state called `what`.
+pub(crate) fn bad_state(what: &str, e: crate::space::SpaceError) -> PlanError {
+    PlanError::BadInput(format!("{what}: {e}"))
+}

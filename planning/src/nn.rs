@@ -1,0 +1,400 @@
+//! Exact nearest-neighbour search under a [`Space`]'s metric, with incremental insertion.
+//!
+//! [`NearestNeighbors`] keeps the states in a flat arena and indexes them with vantage-point
+//! trees, which only use [`Space::distance`] and the triangle inequality, so continuous
+//! (wrapping) coordinates, SE(2) yaw and weighted or compound metrics are all handled exactly.
+//! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
+//! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
+//! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`
+//! trees.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use crate::space::Space;
+
+/// States in the linear buffer before they are indexed by a tree.
+const BUFFER: usize = 32;
+/// Most states in a tree leaf.
+const LEAF: usize = 8;
+/// Slack on the triangle-inequality pruning bounds, so rounding never prunes the exact answer.
+const SLACK: f64 = 1e-9;
+
+/// An exact nearest-neighbour index over states of one [`Space`] (ids are insertion indices).
+///
+/// The index does not own the space: pass the same space to every call.
+///
+/// ```
+/// use hearth_planning::nn::NearestNeighbors;
+/// use hearth_planning::space::{JointSpace, Space};
+///
+/// // One continuous joint: 3.1 and -3.1 are close, the short way round through ±π.
+/// let space = JointSpace::new(&[0.0], &[0.0], &[true])?;
+/// let mut nn = NearestNeighbors::new(1);
+/// for q in [0.0, 1.0, -3.1, 2.0] {
+///     nn.insert(&[q]);
+/// }
+/// assert_eq!(nn.nearest(&space, &[3.1]), Some(2));
+/// assert_eq!(nn.k_nearest(&space, &[0.4], 2), vec![0, 1]);
+/// assert_eq!(nn.within_radius(&space, &[1.5], 0.6), vec![1, 3]);
+/// nn.remove(1);
+/// assert_eq!(nn.nearest(&space, &[0.9]), Some(0));
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct NearestNeighbors {
+    dim: usize,
+    states: Vec<f64>,
+    removed: Vec<bool>,
+    live: usize,
+    buffer: Vec<u32>,
+    trees: Vec<VpTree>,
+}
+
+impl NearestNeighbors {
+    /// An empty index of `dim`-dimensional states.
+    pub fn new(dim: usize) -> Self {
+        Self {
+            dim,
+            states: Vec::new(),
+            removed: Vec::new(),
+            live: 0,
+            buffer: Vec::with_capacity(BUFFER),
+            trees: Vec::new(),
+        }
+    }
+
+    /// Dimension of the states.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Number of states held (removed ones excluded).
+    pub fn len(&self) -> usize {
+        self.live
+    }
+
+    /// Whether no state is held.
+    pub fn is_empty(&self) -> bool {
+        self.live == 0
+    }
+
+    /// Number of ids handed out so far (removed ones included).
+    pub fn ids(&self) -> usize {
+        self.removed.len()
+    }
+
+    /// The state with id `id`.
+    ///
+    /// Panics if `id` was never handed out.
+    #[inline]
+    pub fn state(&self, id: usize) -> &[f64] {
+        &self.states[id * self.dim..(id + 1) * self.dim]
+    }
+
+    /// Whether `id` was removed.
+    pub fn is_removed(&self, id: usize) -> bool {
+        self.removed[id]
+    }
+
+    /// Removes every state.
+    pub fn clear(&mut self) {
+        *self = Self::new(self.dim);
+    }
+
+    /// Adds a state and returns its id (ids count up from 0).
+    ///
+    /// Panics if `q` does not have [`NearestNeighbors::dim`] coordinates.
+    pub fn insert(&mut self, q: &[f64]) -> usize {
+        assert_eq!(q.len(), self.dim, "state dimension");
+        let id = self.removed.len();
+        self.states.extend_from_slice(q);
+        self.removed.push(false);
+        self.live += 1;
+        self.buffer.push(id as u32);
+        id
+    }
+
+    /// Marks a state removed: queries no longer return it (its id stays taken).
+    pub fn remove(&mut self, id: usize) {
+        if !self.removed[id] {
+            self.removed[id] = true;
+            self.live -= 1;
+        }
+    }
+
+    /// Indexes a full buffer: merges it with the trees of equal size into one new tree.
+    fn flush<S: Space>(&mut self, space: &S) {
+        if self.buffer.len() < BUFFER {
+            return;
+        }
+        let mut ids = std::mem::take(&mut self.buffer);
+        while self.trees.last().is_some_and(|t| t.ids.len() <= ids.len()) {
+            let t = self.trees.pop().expect("checked above");
+            ids.extend(t.ids);
+        }
+        // Drop removed states while rebuilding.
+        ids.retain(|&i| !self.removed[i as usize]);
+        if !ids.is_empty() {
+            self.trees.push(VpTree::build(space, &self.states, self.dim, ids));
+        }
+        self.buffer = Vec::with_capacity(BUFFER);
+    }
+
+    fn search<S: Space, C: Collector>(&self, space: &S, q: &[f64], c: &mut C) {
+        for &id in &self.buffer {
+            if !self.removed[id as usize] {
+                c.offer(space.distance(q, self.state(id as usize)), id);
+            }
+        }
+        for t in &self.trees {
+            t.search(space, &self.states, self.dim, &self.removed, q, c);
+        }
+    }
+
+    /// Id of the nearest state to `q` under `space.distance` (the lowest id among equally
+    /// near ones), or `None` when empty.
+    ///
+    /// Takes `&mut self` because queries index the buffered insertions first.
+    pub fn nearest<S: Space>(&mut self, space: &S, q: &[f64]) -> Option<usize> {
+        self.flush(space);
+        let mut c = Nearest {
+            best: f64::INFINITY,
+            id: u32::MAX,
+        };
+        self.search(space, q, &mut c);
+        (c.id != u32::MAX).then_some(c.id as usize)
+    }
+
+    /// Ids of the `k` nearest states to `q`, nearest first (ties by id).
+    pub fn k_nearest<S: Space>(&mut self, space: &S, q: &[f64], k: usize) -> Vec<usize> {
+        if k == 0 {
+            return Vec::new();
+        }
+        self.flush(space);
+        let mut c = KNearest {
+            k,
+            heap: BinaryHeap::with_capacity(k + 1),
+        };
+        self.search(space, q, &mut c);
+        let mut out = c.heap.into_vec();
+        out.sort_unstable();
+        out.into_iter().map(|e| e.1 as usize).collect()
+    }
+
+    /// Ids of every state within `radius` of `q` (inclusive), nearest first (ties by id).
+    pub fn within_radius<S: Space>(&mut self, space: &S, q: &[f64], radius: f64) -> Vec<usize> {
+        self.flush(space);
+        let mut c = Radius {
+            radius,
+            found: Vec::new(),
+        };
+        self.search(space, q, &mut c);
+        c.found.sort_unstable();
+        c.found.into_iter().map(|e| e.1 as usize).collect()
+    }
+}
+
+/// A distance and an id, ordered by distance then id.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry(f64, u32);
+
+impl Eq for Entry {}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
+    }
+}
+
+/// What a search collects: it offers every candidate and prunes with the current radius.
+trait Collector {
+    /// Current search radius: states farther than this cannot be collected.
+    fn radius(&self) -> f64;
+    /// A live state at distance `d`.
+    fn offer(&mut self, d: f64, id: u32);
+}
+
+struct Nearest {
+    best: f64,
+    id: u32,
+}
+
+impl Collector for Nearest {
+    #[inline]
+    fn radius(&self) -> f64 {
+        self.best
+    }
+    #[inline]
+    fn offer(&mut self, d: f64, id: u32) {
+        if d < self.best || (d == self.best && id < self.id) {
+            self.best = d;
+            self.id = id;
+        }
+    }
+}
+
+struct KNearest {
+    k: usize,
+    heap: BinaryHeap<Entry>,
+}
+
+impl Collector for KNearest {
+    #[inline]
+    fn radius(&self) -> f64 {
+        if self.heap.len() < self.k {
+            f64::INFINITY
+        } else {
+            self.heap.peek().map_or(f64::INFINITY, |e| e.0)
+        }
+    }
+    #[inline]
+    fn offer(&mut self, d: f64, id: u32) {
+        let e = Entry(d, id);
+        if self.heap.len() < self.k {
+            self.heap.push(e);
+        } else if self.heap.peek().is_some_and(|top| e < *top) {
+            self.heap.pop();
+            self.heap.push(e);
+        }
+    }
+}
+
+struct Radius {
+    radius: f64,
+    found: Vec<Entry>,
+}
+
+impl Collector for Radius {
+    #[inline]
+    fn radius(&self) -> f64 {
+        self.radius
+    }
+    #[inline]
+    fn offer(&mut self, d: f64, id: u32) {
+        if d <= self.radius {
+            self.found.push(Entry(d, id));
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Node {
+    /// States `ids[start..end]`.
+    Leaf { start: u32, end: u32 },
+    /// A vantage point; `inside` holds states at distance ≤ `mu`, `outside` those at ≥ `mu`.
+    Inner {
+        vp: u32,
+        mu: f64,
+        inside: u32,
+        outside: u32,
+    },
+}
+
+/// A static vantage-point tree over some of the arena's states.
+#[derive(Clone, Debug)]
+struct VpTree {
+    ids: Vec<u32>,
+    nodes: Vec<Node>,
+}
+
+impl VpTree {
+    fn build<S: Space>(space: &S, states: &[f64], dim: usize, ids: Vec<u32>) -> Self {
+        let mut work: Vec<(u32, f64)> = ids.iter().map(|&i| (i, 0.0)).collect();
+        let mut tree = Self {
+            ids: Vec::with_capacity(ids.len()),
+            nodes: Vec::new(),
+        };
+        tree.build_node(space, states, dim, &mut work);
+        tree
+    }
+
+    fn build_node<S: Space>(&mut self, space: &S, states: &[f64], dim: usize, work: &mut [(u32, f64)]) -> u32 {
+        let index = self.nodes.len() as u32;
+        if work.len() <= LEAF {
+            let start = self.ids.len() as u32;
+            self.ids.extend(work.iter().map(|w| w.0));
+            self.nodes.push(Node::Leaf {
+                start,
+                end: self.ids.len() as u32,
+            });
+            return index;
+        }
+        let vp = work[0].0;
+        let vq = &states[vp as usize * dim..(vp as usize + 1) * dim];
+        let rest = &mut work[1..];
+        for w in rest.iter_mut() {
+            w.1 = space.distance(vq, &states[w.0 as usize * dim..(w.0 as usize + 1) * dim]);
+        }
+        let m = rest.len() / 2;
+        rest.select_nth_unstable_by(m, |a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        let mu = rest[m].1;
+        self.nodes.push(Node::Leaf { start: 0, end: 0 }); // placeholder
+        let (inside, outside) = rest.split_at_mut(m);
+        let inside = self.build_node(space, states, dim, inside);
+        let outside = self.build_node(space, states, dim, outside);
+        self.nodes[index as usize] = Node::Inner {
+            vp,
+            mu,
+            inside,
+            outside,
+        };
+        index
+    }
+
+    fn search<S: Space, C: Collector>(
+        &self,
+        space: &S,
+        states: &[f64],
+        dim: usize,
+        removed: &[bool],
+        q: &[f64],
+        c: &mut C,
+    ) {
+        // Nodes to visit with a lower bound on the distance from `q` to any of their states.
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(32);
+        stack.push((0, 0.0));
+        let state = |i: u32| &states[i as usize * dim..(i as usize + 1) * dim];
+        while let Some((n, bound)) = stack.pop() {
+            if bound > c.radius() + SLACK {
+                continue;
+            }
+            match self.nodes[n as usize] {
+                Node::Leaf { start, end } => {
+                    for &id in &self.ids[start as usize..end as usize] {
+                        if !removed[id as usize] {
+                            c.offer(space.distance(q, state(id)), id);
+                        }
+                    }
+                }
+                Node::Inner {
+                    vp,
+                    mu,
+                    inside,
+                    outside,
+                } => {
+                    let d = space.distance(q, state(vp));
+                    if !removed[vp as usize] {
+                        c.offer(d, vp);
+                    }
+                    // Inside states p have d(p, vp) ≤ mu, so d(q, p) ≥ d - mu; outside ones have
+                    // d(p, vp) ≥ mu, so d(q, p) ≥ mu - d. The nearer side is pushed last.
+                    let (b_in, b_out) = ((d - mu).max(0.0), (mu - d).max(0.0));
+                    if d <= mu {
+                        stack.push((outside, b_out));
+                        stack.push((inside, b_in));
+                    } else {
+                        stack.push((inside, b_in));
+                        stack.push((outside, b_out));
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,355 @@
+//! The [`Planner`] trait and what it takes and returns: [`PlanRequest`], [`Goal`], [`Budget`],
+//! [`Solution`] ([`Path`] + [`PlanStats`]).
+//!
+//! Planners own only their settings (and, for [`LazyPrm`](crate::lazy_prm::LazyPrm), a
+//! roadmap); the space, the [`MotionValidator`] and the [`StateValidator`] belong to the
+//! caller and are lent to each [`Planner::plan`] call, so one planner answers many queries.
+
+use std::time::{Duration, Instant};
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{PlanError, bad_state};
+use crate::motion::MotionValidator;
+use crate::space::Space;
+use crate::validity::StateValidator;
+
+/// When a planner gives up: after a wall-clock time, a number of iterations, or whichever
+/// comes first. At least one must be set.
+///
+/// ```
+/// use hearth_planning::planner::Budget;
+///
+/// let b = Budget::time(0.5).with_iterations(10_000);
+/// assert_eq!(b.iterations, Some(10_000));
+/// assert_eq!(b.time.unwrap().as_millis(), 500);
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Budget {
+    /// Wall-clock limit.
+    pub time: Option<Duration>,
+    /// Iteration limit (what an iteration is depends on the planner; see each planner).
+    /// Iteration limits make a run reproducible regardless of machine speed.
+    pub iterations: Option<u64>,
+}
+
+impl Budget {
+    /// A time limit of `secs` seconds (negative or NaN counts as zero).
+    pub fn time(secs: f64) -> Self {
+        Self {
+            time: Some(Duration::from_secs_f64(if secs > 0.0 { secs.min(1e9) } else { 0.0 })),
+            iterations: None,
+        }
+    }
+
+    /// An iteration limit.
+    pub fn iterations(n: u64) -> Self {
+        Self {
+            time: None,
+            iterations: Some(n),
+        }
+    }
+
+    /// The same budget with an iteration limit too.
+    pub fn with_iterations(mut self, n: u64) -> Self {
+        self.iterations = Some(n);
+        self
+    }
+
+    /// The same budget with a time limit too.
+    pub fn with_time(mut self, secs: f64) -> Self {
+        self.time = Budget::time(secs).time;
+        self
+    }
+
+    fn check(&self) -> Result<(), PlanError> {
+        if self.time.is_none() && self.iterations.is_none() {
+            return Err(PlanError::BadInput(
+                "the budget sets neither a time nor an iteration limit".to_owned(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Where to go.
+///
+/// End-effector pose goals are not a variant yet: callers sample goal configurations with IK
+/// and pass them as [`Goal::AnyOf`], which every planner handles natively (BiRRT seeds its goal
+/// tree with all of them, LazyPRM searches to the nearest reachable one).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Goal {
+    /// One goal configuration.
+    Config(Vec<f64>),
+    /// Any of these configurations.
+    AnyOf(Vec<Vec<f64>>),
+}
+
+impl Goal {
+    /// The goal configurations.
+    pub fn states(&self) -> &[Vec<f64>] {
+        match self {
+            Goal::Config(q) => std::slice::from_ref(q),
+            Goal::AnyOf(qs) => qs,
+        }
+    }
+}
+
+/// A planning query: from `start` to `goal`.
+///
+/// ```
+/// use hearth_planning::planner::{Goal, PlanRequest};
+///
+/// let r = PlanRequest::new(vec![0.0, 0.0], Goal::AnyOf(vec![vec![1.0, 0.0], vec![0.0, 1.0]]));
+/// assert_eq!(r.goal.states().len(), 2);
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanRequest {
+    /// Start configuration.
+    pub start: Vec<f64>,
+    /// Goal configuration(s).
+    pub goal: Goal,
+}
+
+impl PlanRequest {
+    /// A request from `start` to `goal`.
+    pub fn new(start: Vec<f64>, goal: Goal) -> Self {
+        Self { start, goal }
+    }
+}
+
+/// A path: states whose consecutive pairs are valid motions, from the start to a goal.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Path {
+    /// The states, start first.
+    pub states: Vec<Vec<f64>>,
+}
+
+impl Path {
+    /// Sum of the distances between consecutive states.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0, 0.0], &[5.0, 5.0], &[false, false])?;
+    /// let path = Path { states: vec![vec![0.0, 0.0], vec![3.0, 4.0], vec![3.0, 5.0]] };
+    /// assert_eq!(path.length(&space), 6.0);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    pub fn length<S: Space>(&self, space: &S) -> f64 {
+        self.states.windows(2).map(|w| space.distance(&w[0], &w[1])).sum()
+    }
+}
+
+/// What a planner did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlanStats {
+    /// Iterations run (see each planner for what one is).
+    pub iterations: u64,
+    /// States checked by the validator during the call (its
+    /// [`checks`](StateValidator::checks) delta, start and goal checks included).
+    pub states_checked: u64,
+    /// Motions checked by the motion validator during the call.
+    pub motions_checked: u64,
+    /// Size of each tree (RRT: one, BiRRT: start tree then goal tree) or of the roadmap.
+    pub tree_sizes: Vec<usize>,
+    /// Wall-clock time of the call.
+    pub time: Duration,
+}
+
+/// A found path and what finding it took.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Solution {
+    /// The path, from the request's start to one of its goals.
+    pub path: Path,
+    /// Statistics of the call.
+    pub stats: PlanStats,
+}
+
+/// A sampling-based planner, generic over the space so the hot loop is monomorphised (no
+/// virtual calls per state).
+///
+/// Every implementation validates its input first: a budget with no limit, states of the wrong
+/// dimension, non-finite or out of bounds give [`PlanError::BadInput`]; an invalid start
+/// [`PlanError::InvalidStart`]; all goals invalid [`PlanError::InvalidGoals`]. Invalid goals
+/// among valid ones are skipped. A run is deterministic for a given generator state and an
+/// iteration-only budget.
+pub trait Planner<S: Space> {
+    /// Plans from `request.start` to one of its goals, checking states with `validator` and
+    /// edges with `motion` (which also provides the space), until `budget` runs out.
+    fn plan<V: StateValidator + ?Sized, R: Rng + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        request: &PlanRequest,
+        budget: &Budget,
+        rng: &mut R,
+    ) -> Result<Solution, PlanError>;
+}
+
+/// The budget and counters of one planning call.
+pub(crate) struct Run {
+    started: Instant,
+    deadline: Option<Instant>,
+    max_iterations: u64,
+    checks0: u64,
+    motions0: u64,
+    pub(crate) iterations: u64,
+}
+
+impl Run {
+    /// Starts the clock and the counters.
+    pub(crate) fn start<S: Space, V: StateValidator + ?Sized>(
+        budget: &Budget,
+        motion: &MotionValidator<S>,
+        validator: &V,
+    ) -> Self {
+        let started = Instant::now();
+        Self {
+            started,
+            deadline: budget.time.and_then(|t| started.checked_add(t)),
+            max_iterations: budget.iterations.unwrap_or(u64::MAX),
+            checks0: validator.checks(),
+            motions0: motion.motions(),
+            iterations: 0,
+        }
+    }
+
+    /// Counts an iteration; false once the budget is spent.
+    #[inline]
+    pub(crate) fn next(&mut self) -> bool {
+        if self.iterations >= self.max_iterations || self.deadline.is_some_and(|d| Instant::now() >= d) {
+            return false;
+        }
+        self.iterations += 1;
+        true
+    }
+
+    /// Statistics so far.
+    pub(crate) fn stats<S: Space, V: StateValidator + ?Sized>(
+        &self,
+        motion: &MotionValidator<S>,
+        validator: &V,
+        tree_sizes: Vec<usize>,
+    ) -> PlanStats {
+        PlanStats {
+            iterations: self.iterations,
+            states_checked: validator.checks() - self.checks0,
+            motions_checked: motion.motions() - self.motions0,
+            tree_sizes,
+            time: self.started.elapsed(),
+        }
+    }
+}
+
+/// Checks the budget and the request, and returns the valid goals (in request order).
+pub(crate) fn valid_goals<S: Space, V: StateValidator + ?Sized>(
+    space: &S,
+    validator: &mut V,
+    request: &PlanRequest,
+    budget: &Budget,
+) -> Result<Vec<Vec<f64>>, PlanError> {
+    budget.check()?;
+    space.check(&request.start).map_err(|e| bad_state("start", e))?;
+    let goals = request.goal.states();
+    if goals.is_empty() {
+        return Err(PlanError::BadInput("no goal state given".to_owned()));
+    }
+    for (i, g) in goals.iter().enumerate() {
+        space.check(g).map_err(|e| bad_state(&format!("goal {i}"), e))?;
+    }
+    if !validator.is_valid(&request.start) {
+        return Err(PlanError::InvalidStart { contact: None });
+    }
+    let valid: Vec<Vec<f64>> = goals.iter().filter(|g| validator.is_valid(g)).cloned().collect();
+    if valid.is_empty() {
+        return Err(PlanError::InvalidGoals {
+            count: goals.len(),
+            first_contact: None,
+        });
+    }
+    Ok(valid)
+}
+
+/// The default step size of tree planners: 0.2 × the space's extent, OMPL's
+/// `maxDistance` default. The extent is twice the distance from the lower corner of the bounds
+/// to their centre: the diagonal of the bounds for bounded coordinates, 2π per continuous one
+/// (twice its true extent; the difference only matters for a mostly-continuous space).
+///
+/// ```
+/// use hearth_planning::planner::default_range;
+/// use hearth_planning::space::JointSpace;
+///
+/// let square = JointSpace::new(&[0.0, 0.0], &[3.0, 4.0], &[false, false])?;
+/// assert!((default_range(&square) - 1.0).abs() < 1e-12);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+pub fn default_range<S: Space>(space: &S) -> f64 {
+    let centre: Vec<f64> = space
+        .lower()
+        .iter()
+        .zip(space.upper())
+        .map(|(l, u)| 0.5 * (l + u))
+        .collect();
+    0.2 * 2.0 * space.distance(space.lower(), &centre)
+}
+
+/// The step size from a setting: `Some(r)` must be positive and finite, `None` is
+/// [`default_range`] (or 1 for a zero-extent space).
+pub(crate) fn resolve_range<S: Space>(space: &S, range: Option<f64>) -> Result<f64, PlanError> {
+    match range {
+        Some(r) if r.is_finite() && r > 0.0 => Ok(r),
+        Some(r) => Err(PlanError::BadInput(format!(
+            "range is {r}; it must be positive and finite"
+        ))),
+        None => {
+            let r = default_range(space);
+            Ok(if r.is_finite() && r > 0.0 { r } else { 1.0 })
+        }
+    }
+}
+
+/// A tree of states: flat arena, parent links and a nearest-neighbour index.
+pub(crate) struct Tree {
+    pub(crate) nn: crate::nn::NearestNeighbors,
+    parents: Vec<u32>,
+}
+
+/// Parent of a root.
+const ROOT: u32 = u32::MAX;
+
+impl Tree {
+    pub(crate) fn new(dim: usize) -> Self {
+        Self {
+            nn: crate::nn::NearestNeighbors::new(dim),
+            parents: Vec::new(),
+        }
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.parents.len()
+    }
+
+    pub(crate) fn add(&mut self, q: &[f64], parent: Option<usize>) -> usize {
+        self.parents.push(parent.map_or(ROOT, |p| p as u32));
+        self.nn.insert(q)
+    }
+
+    #[inline]
+    pub(crate) fn state(&self, i: usize) -> &[f64] {
+        self.nn.state(i)
+    }
+
+    /// States from the root to `i`.
+    pub(crate) fn branch(&self, mut i: usize) -> Vec<Vec<f64>> {
+        let mut out = vec![self.state(i).to_vec()];
+        while self.parents[i] != ROOT {
+            i = self.parents[i] as usize;
+            out.push(self.state(i).to_vec());
+        }
+        out.reverse();
+        out
+    }
+}

@@ -1,0 +1,141 @@
+//! [`Rrt`]: the rapidly-exploring random tree (LaValle 1998), OMPL's `RRT`.
+
+use rand::{Rng, RngExt};
+use serde::{Deserialize, Serialize};
+
+use crate::error::PlanError;
+use crate::motion::MotionValidator;
+use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
+use crate::space::Space;
+use crate::validity::StateValidator;
+
+/// RRT: one tree grown from the start towards random samples (towards a random goal with
+/// probability `goal_bias`), steps of at most `range`. After each new state it tries a
+/// straight motion to the nearest goal when that goal is within `range`.
+///
+/// One iteration is one sample. Settings are serde-derivable, so a TOML file can set them.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+/// use hearth_planning::rrt::Rrt;
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::validity::StateValidator;
+/// use rand::SeedableRng;
+///
+/// struct Free(u64);
+/// impl StateValidator for Free {
+///     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+///     fn checks(&self) -> u64 { self.0 }
+/// }
+/// let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false])?;
+/// let mut motion = MotionValidator::new(space, 0.01);
+/// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+/// let solution = Rrt::default()
+///     .plan(&mut motion, &mut Free(0), &request, &Budget::iterations(10_000), &mut rng)
+///     .unwrap();
+/// assert_eq!(solution.path.states.last().unwrap(), &vec![0.9, 0.9]);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Rrt {
+    /// Longest step; `None` is [`default_range`](crate::planner::default_range)
+    /// (0.2 × the space's extent, as in OMPL).
+    pub range: Option<f64>,
+    /// Probability of steering towards a goal instead of a uniform sample (OMPL: 0.05).
+    pub goal_bias: f64,
+}
+
+impl Default for Rrt {
+    fn default() -> Self {
+        Self {
+            range: None,
+            goal_bias: 0.05,
+        }
+    }
+}
+
+impl<S: Space> Planner<S> for Rrt {
+    fn plan<V: StateValidator + ?Sized, R: Rng + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        request: &PlanRequest,
+        budget: &Budget,
+        rng: &mut R,
+    ) -> Result<Solution, PlanError> {
+        if !(0.0..=1.0).contains(&self.goal_bias) {
+            return Err(PlanError::BadInput(format!(
+                "goal_bias is {}; it must be in [0, 1]",
+                self.goal_bias
+            )));
+        }
+        let mut run = Run::start(budget, motion, validator);
+        let space = motion.space();
+        let range = resolve_range(space, self.range)?;
+        let goals = valid_goals(space, validator, request, budget)?;
+        let dim = space.dim();
+        let mut tree = Tree::new(dim);
+        tree.add(&request.start, None);
+        let (mut target, mut step) = (vec![0.0; dim], vec![0.0; dim]);
+        // Direct connection first, when a goal is within range.
+        let mut newest = Some(0);
+        loop {
+            if let Some(i) = newest.take()
+                && let Some(g) = nearest_goal(motion.space(), &goals, tree.state(i), range)
+                && motion.check_motion(validator, tree.state(i), &goals[g])
+            {
+                let last = tree.add(&goals[g], Some(i));
+                let stats = run.stats(motion, validator, vec![tree.len()]);
+                return Ok(Solution {
+                    path: Path {
+                        states: tree.branch(last),
+                    },
+                    stats,
+                });
+            }
+            if !run.next() {
+                break;
+            }
+            let space = motion.space();
+            if self.goal_bias > 0.0 && rng.random_bool(self.goal_bias) {
+                target.copy_from_slice(&goals[rng.random_range(0..goals.len())]);
+            } else {
+                space.sample(rng, &mut target);
+            }
+            let near = tree.nn.nearest(space, &target).expect("the tree holds the start");
+            let d = space.distance(tree.state(near), &target);
+            if d == 0.0 {
+                continue;
+            }
+            if d > range {
+                space.interpolate(tree.state(near), &target, range / d, &mut step);
+            } else {
+                step.copy_from_slice(&target);
+            }
+            if !validator.is_valid(&step) {
+                continue;
+            }
+            if !motion.check_motion(validator, tree.state(near), &step) {
+                continue;
+            }
+            newest = Some(tree.add(&step, Some(near)));
+        }
+        Err(PlanError::Timeout {
+            stats: run.stats(motion, validator, vec![tree.len()]),
+        })
+    }
+}
+
+/// Index of the goal nearest to `q` if it is within `range`.
+fn nearest_goal<S: Space>(space: &S, goals: &[Vec<f64>], q: &[f64], range: f64) -> Option<usize> {
+    goals
+        .iter()
+        .map(|g| space.distance(q, g))
+        .enumerate()
+        .filter(|&(_, d)| d <= range)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}

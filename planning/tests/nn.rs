@@ -1,0 +1,158 @@
+//! Nearest-neighbour search is exact: it agrees with a brute-force scan under the space's own
+//! metric, continuous (wrapping) joints and SE(2) yaw included.
+
+use hearth_planning::nn::NearestNeighbors;
+use hearth_planning::space::{JointSpace, Se2Space, Space};
+use proptest::prelude::*;
+use rand::SeedableRng;
+use rand_pcg::Pcg64Mcg;
+
+fn joint_space() -> JointSpace {
+    // Two bounded joints, two continuous ones; weights make the metric anisotropic.
+    JointSpace::new(
+        &[-1.0, 0.0, 0.0, -2.0],
+        &[1.0, 0.0, 0.0, 0.5],
+        &[false, true, true, false],
+    )
+    .unwrap()
+    .with_weights(&[1.0, 0.7, 1.3, 0.4])
+    .unwrap()
+}
+
+fn se2_space() -> Se2Space {
+    Se2Space::new([-2.0, -2.0], [2.0, 2.0]).unwrap()
+}
+
+/// Inserts `n` samples (removing every `remove_every`-th), then compares queries with a scan.
+fn agrees_with_brute_force<S: Space>(space: &S, seed: u64, n: usize, remove_every: usize, k: usize, radius: f64) {
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let dim = space.dim();
+    let mut nn = NearestNeighbors::new(dim);
+    let mut states = Vec::new();
+    let mut q = vec![0.0; dim];
+    for i in 0..n {
+        space.sample(&mut rng, &mut q);
+        assert_eq!(nn.insert(&q), i);
+        states.push(q.clone());
+        if remove_every > 0 && i % remove_every == remove_every - 1 {
+            nn.remove(i / 2);
+        }
+    }
+    let live: Vec<usize> = (0..n).filter(|&i| !nn.is_removed(i)).collect();
+    assert_eq!(nn.len(), live.len());
+    for _ in 0..20 {
+        space.sample(&mut rng, &mut q);
+        let mut by_distance: Vec<(f64, usize)> = live.iter().map(|&i| (space.distance(&q, &states[i]), i)).collect();
+        by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        match nn.nearest(space, &q) {
+            None => assert!(live.is_empty()),
+            Some(i) => assert_eq!(space.distance(&q, &states[i]), by_distance[0].0),
+        }
+        let expected: Vec<usize> = by_distance.iter().take(k).map(|e| e.1).collect();
+        assert_eq!(nn.k_nearest(space, &q, k), expected);
+        let expected: Vec<usize> = by_distance.iter().filter(|e| e.0 <= radius).map(|e| e.1).collect();
+        assert_eq!(nn.within_radius(space, &q, radius), expected);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn joint_space_with_continuous_joints(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
+        agrees_with_brute_force(&joint_space(), seed, n, remove, k, 1.0);
+    }
+
+    #[test]
+    fn se2_space_with_wrapping_yaw(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
+        agrees_with_brute_force(&se2_space(), seed, n, remove, k, 0.8);
+    }
+}
+
+#[test]
+fn wraps_through_pi() {
+    let space = se2_space();
+    let mut nn = NearestNeighbors::new(3);
+    for i in 0..200 {
+        let yaw = -3.0 + 6.0 * i as f64 / 200.0;
+        nn.insert(&[0.0, 0.0, yaw]);
+    }
+    let far = nn.insert(&[0.0, 0.0, 3.1]);
+    // -3.1 is 0.083 from 3.1 the short way round, closer than any yaw in [-3, 3).
+    assert_eq!(nn.nearest(&space, &[0.0, 0.0, -3.1]), Some(far));
+    nn.clear();
+    assert!(nn.is_empty());
+    assert_eq!(nn.nearest(&space, &[0.0, 0.0, 0.0]), None);
+}
+
+/// A space that counts its distance evaluations.
+struct Counting {
+    inner: JointSpace,
+    calls: std::sync::atomic::AtomicU64,
+}
+
+impl Space for Counting {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+    fn sample<R: rand::Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]) {
+        self.inner.sample(rng, out)
+    }
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.inner.distance(a, b)
+    }
+    fn interpolate(&self, a: &[f64], b: &[f64], t: f64, out: &mut [f64]) {
+        self.inner.interpolate(a, b, t, out)
+    }
+    fn lower(&self) -> &[f64] {
+        self.inner.lower()
+    }
+    fn upper(&self) -> &[f64] {
+        self.inner.upper()
+    }
+    fn enforce_bounds(&self, q: &mut [f64]) {
+        self.inner.enforce_bounds(q)
+    }
+    fn satisfies_bounds(&self, q: &[f64]) -> bool {
+        self.inner.satisfies_bounds(q)
+    }
+    fn difference(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        self.inner.difference(a, b, out)
+    }
+    fn check(&self, q: &[f64]) -> Result<(), hearth_planning::space::SpaceError> {
+        self.inner.check(q)
+    }
+    fn coordinate_name(&self, i: usize) -> Option<&str> {
+        self.inner.coordinate_name(i)
+    }
+}
+
+#[test]
+fn queries_are_not_a_linear_scan() {
+    let space = Counting {
+        inner: JointSpace::new(&[0.0, 0.0, 0.0], &[1.0, 1.0, 0.0], &[false, false, true]).unwrap(),
+        calls: Default::default(),
+    };
+    let mut rng = Pcg64Mcg::seed_from_u64(9);
+    let mut nn = NearestNeighbors::new(3);
+    let mut q = [0.0; 3];
+    let n = 20_000;
+    for _ in 0..n {
+        space.sample(&mut rng, &mut q);
+        nn.insert(&q);
+        nn.nearest(&space, &q); // interleaved queries, as in a tree planner
+    }
+    let before = space.calls.load(std::sync::atomic::Ordering::Relaxed);
+    let queries = 100;
+    for _ in 0..queries {
+        space.sample(&mut rng, &mut q);
+        nn.nearest(&space, &q);
+    }
+    let per_query = (space.calls.load(std::sync::atomic::Ordering::Relaxed) - before) / queries;
+    assert!(
+        per_query < n / 20,
+        "{per_query} distance evaluations per query among {n} states"
+    );
+    println!("{per_query} distance evaluations per nearest query among {n} states");
+}

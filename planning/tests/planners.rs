@@ -1,0 +1,623 @@
+//! Every planner on the same fixture worlds: a 2-D narrow passage, a Panda over a table with a
+//! post on it, and a MotionBenchMaker problem; plus bad input for every [`PlanError`] case.
+
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
+
+use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::obstacles::{Obstacle, ParryScene};
+use hearth_planning::problem::ProblemSet;
+use hearth_planning::space::{JointSpace, Space};
+use hearth_planning::validity::{RobotValidity, StateValidator};
+use hearth_planning::{
+    BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest, Planner, Rrt, Solution,
+};
+use parry3d::math::{Pose, Vector};
+use rand::SeedableRng;
+use rand_pcg::Pcg64Mcg;
+
+/// A wall at x ∈ [0.45, 0.55] with a gap at y ∈ [0.48, 0.52].
+#[derive(Default)]
+struct NarrowPassage {
+    checks: u64,
+}
+
+impl StateValidator for NarrowPassage {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        !(0.45..=0.55).contains(&q[0]) || (0.48..=0.52).contains(&q[1])
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+fn square() -> JointSpace {
+    JointSpace::new(&[0., 0.], &[1., 1.], &[false, false]).unwrap()
+}
+
+/// Fine enough that an edge clipping a corner of the gap by more than 1e-4 is caught; the
+/// paths are checked again at a 10× finer resolution.
+const PASSAGE_RESOLUTION: f64 = 0.001;
+
+/// From below the gap on one side to below it on the other: the straight line is blocked.
+fn passage_request() -> PlanRequest {
+    PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.1]))
+}
+
+fn panda_matrix() -> SelfCollisionMatrix {
+    static ACM: OnceLock<SelfCollisionMatrix> = OnceLock::new();
+    ACM.get_or_init(|| {
+        let m = RobotModel::builtin("panda").unwrap();
+        SelfCollisionMatrix::compute(
+            &m,
+            &SelfCollisionSettings {
+                samples: 300,
+                ..Default::default()
+            },
+        )
+    })
+    .clone()
+}
+
+/// The Panda arm, fingers open at 0.04, among `obstacles`.
+fn panda(obstacles: ParryScene) -> (JointSpace, RobotValidity) {
+    let m = RobotModel::builtin("panda").unwrap();
+    let arm = Chain::named(&m, "arm").unwrap();
+    let space = JointSpace::from_chain(&arm).unwrap();
+    let mut v = RobotValidity::new(arm, panda_matrix(), Arc::new(obstacles));
+    let mut q_full = m.neutral_configuration();
+    Chain::new(&m, &["panda_finger_joint1"])
+        .unwrap()
+        .scatter(&[0.04], &mut q_full);
+    v.set_reference(&q_full).unwrap();
+    (space, v)
+}
+
+const PANDA_RESOLUTION: f64 = 0.02;
+
+/// A table in front of the Panda with a post standing on it between the start and the goal.
+fn table_world() -> (JointSpace, RobotValidity) {
+    let table = Obstacle::cuboid("table", Pose::translation(0.5, 0.0, 0.2), Vector::new(0.3, 0.6, 0.02));
+    let post = Obstacle::cuboid("post", Pose::translation(0.5, 0.0, 0.45), Vector::new(0.05, 0.05, 0.25));
+    panda(ParryScene::new(vec![table, post]))
+}
+
+fn table_request() -> PlanRequest {
+    PlanRequest::new(
+        vec![-0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785],
+        Goal::Config(vec![0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785]),
+    )
+}
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+}
+
+/// Whether `a` and `b` are the same state (up to rounding).
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+}
+
+/// Checks a solution: it starts at the start, ends at a goal, every state is valid and every
+/// motion passes a motion validator at a 10× finer resolution.
+fn check_solution<S: Space + Clone, V: StateValidator>(
+    space: &S,
+    resolution: f64,
+    validator: &mut V,
+    request: &PlanRequest,
+    solution: &Solution,
+) {
+    let states = &solution.path.states;
+    assert!(states.len() >= 2, "a path has at least two states");
+    assert_eq!(states[0], request.start, "the path starts at the start");
+    let last = states.last().unwrap();
+    assert!(
+        request.goal.states().iter().any(|g| same(g, last)),
+        "the path ends at a goal: {last:?}"
+    );
+    let mut fine = MotionValidator::new(space.clone(), resolution / 10.0);
+    for (i, w) in states.windows(2).enumerate() {
+        assert!(validator.is_valid(&w[1]), "state {} is invalid", i + 1);
+        assert!(
+            fine.check_motion(validator, &w[0], &w[1]),
+            "motion {i} → {} is invalid",
+            i + 1
+        );
+    }
+}
+
+/// Plans twice with the same seed (from a fresh planner each time), asserts both runs give the
+/// same path, checks the path and returns the solution.
+fn solve<S: Space + Clone, V: StateValidator, P: Planner<S>>(
+    label: &str,
+    make: impl Fn() -> P,
+    space: &S,
+    resolution: f64,
+    validator: &mut V,
+    request: &PlanRequest,
+    budget: &Budget,
+) -> Solution {
+    let mut runs = Vec::new();
+    for _ in 0..2 {
+        let mut motion = MotionValidator::new(space.clone(), resolution);
+        let mut rng = Pcg64Mcg::seed_from_u64(7);
+        let t = Instant::now();
+        let solution = make()
+            .plan(&mut motion, validator, request, budget, &mut rng)
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
+        println!(
+            "{label}: {:.2} ms, {} states, length {:.3}, {:?}",
+            t.elapsed().as_secs_f64() * 1e3,
+            solution.path.states.len(),
+            solution.path.length(space),
+            solution.stats
+        );
+        runs.push(solution);
+    }
+    assert_eq!(runs[0].path, runs[1].path, "{label}: same seed, same path");
+    let solution = runs.pop().unwrap();
+    check_solution(space, resolution, validator, request, &solution);
+    solution
+}
+
+/// Iteration budgets keep runs reproducible; the time limit is only a safety net.
+fn budget(iterations: u64) -> Budget {
+    Budget::iterations(iterations).with_time(20.0)
+}
+
+/// Solves the narrow passage and checks the path crosses the wall's plane x = 0.5 in the gap.
+fn passage<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P) {
+    let s = solve(
+        label,
+        make,
+        &square(),
+        PASSAGE_RESOLUTION,
+        &mut NarrowPassage::default(),
+        &passage_request(),
+        &budget(200_000),
+    );
+    let crossings: Vec<f64> = s
+        .path
+        .states
+        .windows(2)
+        .filter(|w| (w[0][0] - 0.5) * (w[1][0] - 0.5) <= 0.0 && w[0][0] != w[1][0])
+        .map(|w| w[0][1] + (0.5 - w[0][0]) / (w[1][0] - w[0][0]) * (w[1][1] - w[0][1]))
+        .collect();
+    assert!(!crossings.is_empty(), "{label}: the path crosses the wall");
+    for y in crossings {
+        assert!(
+            (0.48..=0.52).contains(&y),
+            "{label}: crosses x = 0.5 at y = {y}, outside the gap"
+        );
+    }
+}
+
+#[test]
+fn narrow_passage_rrt() {
+    passage("passage/rrt", Rrt::default);
+}
+
+#[test]
+fn narrow_passage_birrt() {
+    passage("passage/birrt", BiRrt::default);
+}
+
+#[test]
+fn narrow_passage_lazy_prm() {
+    passage("passage/lazy_prm", LazyPrm::default);
+}
+
+#[test]
+fn panda_table_rrt() {
+    let (space, mut v) = table_world();
+    solve(
+        "table/rrt",
+        Rrt::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &table_request(),
+        &budget(50_000),
+    );
+}
+
+#[test]
+fn panda_table_birrt() {
+    let (space, mut v) = table_world();
+    solve(
+        "table/birrt",
+        BiRrt::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &table_request(),
+        &budget(50_000),
+    );
+}
+
+#[test]
+fn panda_table_lazy_prm() {
+    let (space, mut v) = table_world();
+    solve(
+        "table/lazy_prm",
+        LazyPrm::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &table_request(),
+        &budget(50_000),
+    );
+}
+
+/// Runs `make`'s planner on every MBM problem of the excerpt whose start and goals are valid
+/// in our (slightly padded) model; asserts at least one is solved.
+fn mbm<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P) {
+    let set = ProblemSet::load(data("panda_table_pick.json")).unwrap();
+    let mut solved = 0;
+    for p in set.valid_problems() {
+        let (space, mut v) = panda(p.scene());
+        let request = PlanRequest::new(p.start.clone(), Goal::AnyOf(p.goals.clone()));
+        if let Some(c) = v.explain(&p.start) {
+            println!("{label}: skipping problem {}: start invalid in our model ({c})", p.id);
+            continue;
+        }
+        if p.goals.iter().all(|g| v.explain(g).is_some()) {
+            println!("{label}: skipping problem {}: goals invalid in our model", p.id);
+            continue;
+        }
+        solve(
+            &format!("{label}/{}", p.id),
+            &make,
+            &space,
+            PANDA_RESOLUTION,
+            &mut v,
+            &request,
+            &budget(50_000),
+        );
+        solved += 1;
+    }
+    assert!(solved >= 1, "{label}: no MBM problem solved");
+}
+
+#[test]
+fn mbm_rrt() {
+    mbm("mbm/rrt", Rrt::default);
+}
+
+#[test]
+fn mbm_birrt() {
+    mbm("mbm/birrt", BiRrt::default);
+}
+
+#[test]
+fn mbm_lazy_prm() {
+    mbm("mbm/lazy_prm", LazyPrm::default);
+}
+
+#[test]
+fn any_of_goals_skips_invalid_ones() {
+    let request = PlanRequest::new(
+        vec![0.1, 0.1],
+        Goal::AnyOf(vec![vec![0.5, 0.9], vec![0.9, 0.9], vec![0.9, 0.1]]),
+    );
+    for s in [
+        solve(
+            "any/rrt",
+            Rrt::default,
+            &square(),
+            PASSAGE_RESOLUTION,
+            &mut NarrowPassage::default(),
+            &request,
+            &budget(100_000),
+        ),
+        solve(
+            "any/birrt",
+            BiRrt::default,
+            &square(),
+            PASSAGE_RESOLUTION,
+            &mut NarrowPassage::default(),
+            &request,
+            &budget(100_000),
+        ),
+        solve(
+            "any/lazy",
+            LazyPrm::default,
+            &square(),
+            PASSAGE_RESOLUTION,
+            &mut NarrowPassage::default(),
+            &request,
+            &budget(100_000),
+        ),
+    ] {
+        assert_ne!(
+            s.path.states.last().unwrap(),
+            &vec![0.5, 0.9],
+            "the goal in the wall is never reached"
+        );
+    }
+}
+
+#[test]
+fn birrt_seeds_goal_tree_with_every_valid_goal() {
+    let request = PlanRequest::new(
+        vec![0.1, 0.1],
+        Goal::AnyOf(vec![vec![0.5, 0.9], vec![0.9, 0.9], vec![0.9, 0.1]]),
+    );
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(3);
+    let s = BiRrt::default()
+        .plan(
+            &mut motion,
+            &mut NarrowPassage::default(),
+            &request,
+            &budget(100_000),
+            &mut rng,
+        )
+        .unwrap();
+    assert_eq!(s.stats.tree_sizes.len(), 2);
+    assert!(s.stats.tree_sizes[1] >= 2, "two valid goals seed the goal tree");
+}
+
+#[test]
+fn lazy_prm_reuses_its_roadmap_and_clears_it() {
+    let mut prm = LazyPrm::new(LazyPrmSettings {
+        k: 8,
+        ..Default::default()
+    });
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    let mut v = NarrowPassage::default();
+    let mut rng = Pcg64Mcg::seed_from_u64(5);
+    let first = prm
+        .plan(&mut motion, &mut v, &passage_request(), &budget(200_000), &mut rng)
+        .unwrap();
+    let size = prm.roadmap_size();
+    assert!(size > 10);
+    let request = PlanRequest::new(vec![0.2, 0.8], Goal::Config(vec![0.8, 0.2]));
+    let second = prm
+        .plan(&mut motion, &mut v, &request, &budget(200_000), &mut rng)
+        .unwrap();
+    assert!(prm.roadmap_size() >= size);
+    assert!(
+        second.stats.iterations < first.stats.iterations,
+        "the second query reuses the roadmap: {} vs {}",
+        second.stats.iterations,
+        first.stats.iterations
+    );
+    check_solution(&square(), PASSAGE_RESOLUTION, &mut v, &request, &second);
+    prm.clear();
+    assert_eq!(prm.roadmap_size(), 0);
+}
+
+/// Every planner, boxed behind a closure so the bad-input tests can run all of them.
+fn every_planner(
+    request: &PlanRequest,
+    budget: &Budget,
+    validator: &mut NarrowPassage,
+) -> Vec<(&'static str, Result<Solution, PlanError>)> {
+    let mut out = Vec::new();
+    let mut rng = Pcg64Mcg::seed_from_u64(1);
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    out.push((
+        "rrt",
+        Rrt::default().plan(&mut motion, validator, request, budget, &mut rng),
+    ));
+    out.push((
+        "birrt",
+        BiRrt::default().plan(&mut motion, validator, request, budget, &mut rng),
+    ));
+    out.push((
+        "lazy_prm",
+        LazyPrm::default().plan(&mut motion, validator, request, budget, &mut rng),
+    ));
+    out
+}
+
+fn expect_bad_input(request: PlanRequest, budget: Budget, needle: &str) {
+    for (name, r) in every_planner(&request, &budget, &mut NarrowPassage::default()) {
+        match r {
+            Err(PlanError::BadInput(m)) => assert!(m.contains(needle), "{name}: `{m}` should name `{needle}`"),
+            other => panic!("{name}: expected BadInput({needle}), got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_named() {
+    let goal = || Goal::Config(vec![0.9, 0.9]);
+    expect_bad_input(passage_request(), Budget::default(), "budget");
+    expect_bad_input(PlanRequest::new(vec![0.1], goal()), budget(10), "start");
+    expect_bad_input(
+        PlanRequest::new(vec![0.1, f64::NAN], goal()),
+        budget(10),
+        "start: coordinate 1",
+    );
+    expect_bad_input(
+        PlanRequest::new(vec![1.5, 0.1], goal()),
+        budget(10),
+        "start: coordinate 0",
+    );
+    expect_bad_input(
+        PlanRequest::new(vec![0.1, 0.1], Goal::AnyOf(vec![vec![0.9, 0.9], vec![0.9, 2.0]])),
+        budget(10),
+        "goal 1",
+    );
+    expect_bad_input(
+        PlanRequest::new(vec![0.1, 0.1], Goal::AnyOf(vec![])),
+        budget(10),
+        "no goal",
+    );
+
+    // Settings.
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(1);
+    let mut v = NarrowPassage::default();
+    let r = passage_request();
+    let bad = |e: Result<Solution, PlanError>| matches!(e, Err(PlanError::BadInput(_)));
+    let rrt = Rrt {
+        range: Some(0.0),
+        ..Default::default()
+    };
+    assert!(bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    let rrt = Rrt {
+        goal_bias: 1.5,
+        ..Default::default()
+    };
+    assert!(bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    let birrt = BiRrt { range: Some(f64::NAN) };
+    assert!(bad(birrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    let mut prm = LazyPrm::new(LazyPrmSettings {
+        k: 0,
+        ..Default::default()
+    });
+    assert!(bad(prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+}
+
+#[test]
+fn invalid_start_and_goals() {
+    let in_wall = vec![0.5, 0.1];
+    let request = PlanRequest::new(in_wall.clone(), Goal::Config(vec![0.9, 0.9]));
+    for (name, r) in every_planner(&request, &budget(10), &mut NarrowPassage::default()) {
+        assert_eq!(r, Err(PlanError::InvalidStart { contact: None }), "{name}");
+    }
+    let request = PlanRequest::new(vec![0.1, 0.1], Goal::AnyOf(vec![in_wall.clone(), vec![0.5, 0.9]]));
+    for (name, r) in every_planner(&request, &budget(10), &mut NarrowPassage::default()) {
+        let e = r.unwrap_err();
+        assert_eq!(
+            e,
+            PlanError::InvalidGoals {
+                count: 2,
+                first_contact: None
+            },
+            "{name}"
+        );
+        let e = e.explain_with(&request, |q| (q[0] == 0.5).then(|| "touches the wall".to_owned()));
+        assert_eq!(
+            e,
+            PlanError::InvalidGoals {
+                count: 2,
+                first_contact: Some("touches the wall".to_owned())
+            }
+        );
+        assert!(
+            e.to_string()
+                .contains("all 2 goal state(s) are invalid: touches the wall"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn invalid_start_names_the_contact_with_robot_validity() {
+    let (space, mut v) = table_world();
+    let into_table = vec![0.0, 0.9, 0.0, -1.2, 0.0, 2.0, 0.785];
+    let request = PlanRequest::new(into_table, table_request().goal);
+    let mut motion = MotionValidator::new(space, PANDA_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(1);
+    let e = BiRrt::default()
+        .plan(&mut motion, &mut v, &request, &budget(10), &mut rng)
+        .unwrap_err()
+        .explain_with(&request, |q| v.explain(q).map(|c| c.to_string()));
+    match &e {
+        PlanError::InvalidStart { contact: Some(c) } => assert!(c.contains("touches obstacle"), "{c}"),
+        other => panic!("expected an invalid start touching the table, got {other:?}"),
+    }
+    assert!(e.to_string().starts_with("the start state is invalid: link `"), "{e}");
+}
+
+#[test]
+fn timeout_reports_stats() {
+    for (name, r) in every_planner(
+        &passage_request(),
+        &Budget::iterations(3),
+        &mut NarrowPassage::default(),
+    ) {
+        match r {
+            Err(PlanError::Timeout { stats }) => {
+                assert_eq!(stats.iterations, 3, "{name}");
+                assert!(stats.states_checked >= 2, "{name}: start and goal are checked");
+                assert!(!stats.tree_sizes.is_empty(), "{name}");
+            }
+            other => panic!("{name}: expected a timeout, got {other:?}"),
+        }
+    }
+    // A zero time budget stops at once.
+    for (name, r) in every_planner(&passage_request(), &Budget::time(0.0), &mut NarrowPassage::default()) {
+        assert!(matches!(r, Err(PlanError::Timeout { .. })), "{name}: {r:?}");
+    }
+}
+
+/// Whether every motion of `path` passes a motion validator at `resolution`.
+fn path_valid<S: Space + Clone, V: StateValidator>(
+    space: &S,
+    resolution: f64,
+    validator: &mut V,
+    path: &[Vec<f64>],
+) -> bool {
+    let mut mv = MotionValidator::new(space.clone(), resolution);
+    path.windows(2)
+        .all(|w| validator.is_valid(&w[1]) && mv.check_motion(validator, &w[0], &w[1]))
+}
+
+/// Success rate and median time of `make`'s planner over `seeds` seeds. Every path is checked
+/// at the planner's resolution (which must hold); how many also pass at a 10× finer one is
+/// printed (a path's edge can clip an obstacle's corner by less than the resolution, most
+/// often with LazyPRM, whose shortest paths hug corners).
+#[allow(clippy::too_many_arguments)]
+fn success_rate<S: Space + Clone, V: StateValidator, P: Planner<S>>(
+    label: &str,
+    make: impl Fn() -> P,
+    space: &S,
+    resolution: f64,
+    validator: &mut V,
+    request: &PlanRequest,
+    budget: &Budget,
+    seeds: u64,
+) -> f64 {
+    let mut times = Vec::new();
+    let (mut solved, mut fine) = (0, 0);
+    for seed in 0..seeds {
+        let mut motion = MotionValidator::new(space.clone(), resolution);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let t = Instant::now();
+        let r = make().plan(&mut motion, validator, request, budget, &mut rng);
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        if let Ok(s) = r {
+            assert_eq!(s.path.states[0], request.start);
+            assert!(
+                path_valid(space, resolution, validator, &s.path.states),
+                "{label}: seed {seed}"
+            );
+            fine += usize::from(path_valid(space, resolution / 10.0, validator, &s.path.states));
+            solved += 1;
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "{label}: solved {solved}/{seeds} ({fine} also valid at 10x finer resolution), median {:.3} ms, max {:.3} ms",
+        times[times.len() / 2],
+        times[times.len() - 1]
+    );
+    solved as f64 / seeds as f64
+}
+
+#[test]
+fn narrow_passage_is_solved_for_every_seed() {
+    let r = passage_request();
+    let b = budget(100_000);
+    let (space, res) = (square(), PASSAGE_RESOLUTION);
+    let mut v = NarrowPassage::default();
+    assert_eq!(
+        success_rate("passage/rrt", Rrt::default, &space, res, &mut v, &r, &b, 10),
+        1.0
+    );
+    assert_eq!(
+        success_rate("passage/birrt", BiRrt::default, &space, res, &mut v, &r, &b, 10),
+        1.0
+    );
+    assert_eq!(
+        success_rate("passage/lazy_prm", LazyPrm::default, &space, res, &mut v, &r, &b, 10),
+        1.0
+    );
+}

@@ -1,0 +1,195 @@
+//! The broad phase inside `RobotValidity::is_valid` (bounding spheres, hint ordering) must never
+//! change an answer: compare it with a brute-force exact reference written here.
+
+use std::sync::Arc;
+
+use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, links_touch, to_pose};
+use hearth_planning::obstacles::{Obstacle, ParryScene};
+use hearth_planning::problem::ProblemSet;
+use hearth_planning::validity::{RobotValidity, StateValidator};
+use nalgebra::Isometry3;
+use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::query;
+use rand::{RngExt, SeedableRng};
+
+/// Every geometric link against every obstacle (exact parry test on the link shape), then every
+/// checked self-collision pair with `links_touch`.
+struct Reference {
+    model: RobotModel,
+    chain: Chain,
+    pairs: Vec<(usize, usize)>,
+    scene: ParryScene,
+    q_full: Vec<f64>,
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl Reference {
+    fn new(chain: &Chain, acm: &SelfCollisionMatrix, scene: ParryScene) -> Self {
+        let model = chain.model().clone();
+        Self {
+            pairs: acm.checked_geometric_pairs(&model),
+            q_full: model.neutral_configuration(),
+            poses: model.pose_buffer(),
+            chain: chain.clone(),
+            model,
+            scene,
+        }
+    }
+
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.chain.scatter(q, &mut self.q_full);
+        self.model
+            .fk_from(&Isometry3::identity(), &self.q_full, &mut self.poses)
+            .unwrap();
+        let margin = self.scene.margin();
+        for l in 0..self.model.links().len() {
+            let Some(s) = self.model.link_shape(l) else { continue };
+            let pose = to_pose(&(self.poses[l] * s.origin));
+            for o in self.scene.obstacles() {
+                let hit = if margin > 0.0 {
+                    query::distance(&pose, s.shape.as_ref(), &o.pose, &*o.shape).map_or(true, |d| d.distance <= margin)
+                } else {
+                    query::intersection_test(&pose, s.shape.as_ref(), &o.pose, &*o.shape)
+                        .map_or(true, |r| r.intersecting)
+                };
+                if hit {
+                    return false;
+                }
+            }
+        }
+        !self
+            .pairs
+            .iter()
+            .any(|&(a, b)| links_touch(&self.model, &self.poses, a, b))
+    }
+}
+
+fn panda() -> (Chain, SelfCollisionMatrix) {
+    let m = RobotModel::builtin("panda").unwrap();
+    let arm = Chain::named(&m, "arm").unwrap();
+    let acm = SelfCollisionMatrix::compute(
+        &m,
+        &SelfCollisionSettings {
+            samples: 1000,
+            ..Default::default()
+        },
+    );
+    (arm, acm)
+}
+
+fn cluttered(seed: u64, n: usize) -> Vec<Obstacle> {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    (0..n)
+        .map(|i| {
+            let c = Vector::new(
+                rng.random_range(-0.9..0.9),
+                rng.random_range(-0.9..0.9),
+                rng.random_range(-0.2..1.2),
+            );
+            let rot = Rotation::from_scaled_axis(Vector::new(
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+            ));
+            let pose = Pose::from_parts(c, rot);
+            match i % 3 {
+                0 => Obstacle::cuboid(
+                    format!("box{i}"),
+                    pose,
+                    Vector::new(
+                        rng.random_range(0.01..0.12),
+                        rng.random_range(0.01..0.12),
+                        rng.random_range(0.01..0.12),
+                    ),
+                ),
+                1 => Obstacle::ball(format!("ball{i}"), c, rng.random_range(0.01..0.1)),
+                _ => Obstacle::cylinder(
+                    format!("cyl{i}"),
+                    pose,
+                    rng.random_range(0.02..0.15),
+                    rng.random_range(0.01..0.06),
+                ),
+            }
+        })
+        .collect()
+}
+
+/// Runs `qs` through both checkers (twice through the fast one, in two orders, so the
+/// last-failure hint is exercised) and returns (valid, invalid) counts.
+fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize, usize) {
+    let expected: Vec<bool> = qs.iter().map(|q| r.is_valid(q)).collect();
+    for (i, q) in qs.iter().enumerate() {
+        assert_eq!(v.is_valid(q), expected[i], "configuration {i}: {q:?}");
+        assert_eq!(v.is_valid_exact(q), expected[i], "exact path, configuration {i}");
+        assert_eq!(v.explain(q).is_none(), expected[i], "explain, configuration {i}");
+    }
+    for (i, q) in qs.iter().enumerate().rev() {
+        assert_eq!(v.is_valid(q), expected[i], "reverse order, configuration {i}");
+    }
+    let valid = expected.iter().filter(|&&b| b).count();
+    (valid, expected.len() - valid)
+}
+
+fn random_configurations(chain: &Chain, seed: u64, n: usize) -> Vec<Vec<f64>> {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let mut q = vec![0.0; chain.dof()];
+            chain.random_configuration(&mut rng, &mut q);
+            q
+        })
+        .collect()
+}
+
+#[test]
+fn random_clutter_matches_brute_force() {
+    let (arm, acm) = panda();
+    let qs = random_configurations(&arm, 11, 3000);
+    for (seed, n, margin) in [(1u64, 24usize, 0.0f32), (2, 12, 0.0), (3, 24, 0.02)] {
+        let obstacles = cluttered(seed, n);
+        let scene = ParryScene::new(obstacles.clone()).with_margin(margin);
+        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+        let mut r = Reference::new(&arm, &acm, scene);
+        let (valid, invalid) = compare(&mut v, &mut r, &qs);
+        assert!(
+            valid > 100 && invalid > 100,
+            "seed {seed}: {valid} valid / {invalid} invalid"
+        );
+    }
+}
+
+#[test]
+fn self_collision_only_matches_brute_force() {
+    let (arm, acm) = panda();
+    let qs = random_configurations(&arm, 12, 3000);
+    let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(ParryScene::new(vec![])));
+    let mut r = Reference::new(&arm, &acm, ParryScene::new(vec![]));
+    let (valid, invalid) = compare(&mut v, &mut r, &qs);
+    assert!(valid > 100 && invalid > 10, "{valid} valid / {invalid} invalid");
+}
+
+#[test]
+fn mbm_table_pick_matches_brute_force() {
+    let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/panda_table_pick.json")).unwrap();
+    let (arm, acm) = panda();
+    let mut total = (0, 0);
+    for (k, problem) in set.valid_problems().enumerate() {
+        let scene = problem.scene();
+        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+        let mut r = Reference::new(&arm, &acm, scene);
+        let mut qs = random_configurations(&arm, 100 + k as u64, 300);
+        qs.push(problem.start.clone());
+        qs.extend(problem.goals.iter().cloned());
+        // Straight-line interpolations start → goal: near-contact configurations.
+        for g in &problem.goals {
+            for t in 1..20 {
+                let t = t as f64 / 20.0;
+                qs.push(problem.start.iter().zip(g).map(|(a, b)| a + t * (b - a)).collect());
+            }
+        }
+        let (valid, invalid) = compare(&mut v, &mut r, &qs);
+        total.0 += valid;
+        total.1 += invalid;
+    }
+    assert!(total.0 > 50 && total.1 > 20, "{total:?}");
+}
