@@ -391,3 +391,43 @@ fn bench_kin_writes_json() {
     assert_eq!(report["ik_samples"], 20, "{report}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_plan_writes_results_json() {
+    let dir = std::env::temp_dir().join(format!("hearth_cli_plan_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("plan.json");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/panda_table_pick.json");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+        .args([
+            "bench",
+            "plan",
+            "--problems",
+            data,
+            "--planner",
+            "birrt",
+            "--time-limit",
+            "2",
+            "--json",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2, "one row per problem");
+    // Problem 41 is marked invalid in the set: reported as skipped, not failed.
+    let p41 = results.iter().find(|r| r["id"] == 41).unwrap();
+    assert!(p41["skipped"].as_str().unwrap().contains("invalid"));
+    let p1 = results.iter().find(|r| r["id"] == 1).unwrap();
+    assert!(p1.get("success").is_some() || p1.get("skipped").is_some(), "{p1}");
+    assert!(v["summary"]["table_pick"]["plans"].as_u64() == Some(2));
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+        .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(!String::from_utf8_lossy(&bad.stderr).contains("panicked"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -15,6 +15,8 @@ use serde_json::json;
 pub enum BenchCommand {
     /// Forward kinematics, Jacobian and inverse kinematics of one robot.
     Kin(BenchKinArgs),
+    /// Planners on benchmark problem files (MotionBenchMaker JSON).
+    Plan(super::bench_plan::BenchPlanArgs),
 }
 
 #[derive(Args, Debug)]
@@ -39,6 +41,7 @@ pub struct BenchKinArgs {
 pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Kin(a) => kin(a),
+        BenchCommand::Plan(a) => super::bench_plan::run(a),
     }
 }
 
