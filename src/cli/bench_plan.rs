@@ -155,7 +155,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         for problem in &set.problems {
             for rep in 0..a.repeat {
                 done += 1;
-                if done % 10 == 0 || done == total {
+                if done.is_multiple_of(10) || done == total {
                     eprint!("\r{done}/{total} plans");
                 }
                 let mut row = json!({"family": set.family, "id": problem.id, "planner": format!("{:?}", a.planner).to_lowercase(), "repeat": rep});
