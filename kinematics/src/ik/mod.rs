@@ -349,7 +349,10 @@ impl IkSolver {
             } else {
                 self.chain.random_configuration(rng, &mut self.q);
             }
-            let pose = self.eval_q();
+            // Borrow `q` out for the evaluation (no allocation: `take` leaves an empty Vec).
+            let q = std::mem::take(&mut self.q);
+            let pose = self.eval(&q);
+            self.q = q;
             let (mut e, mut ep, mut er) = Self::residual(target, &pose);
             let mut lambda = s.damping;
             let mut converged = ep <= s.position_tolerance && er <= s.orientation_tolerance;
@@ -480,12 +483,6 @@ impl IkSolver {
         for i in 0..self.q.len() {
             self.q[i] = self.q[i].clamp(self.lo[i], self.hi[i]);
         }
-    }
-
-    fn eval_q(&mut self) -> Isometry3<f64> {
-        self.chain.scatter(&self.q, &mut self.q_full);
-        self.model.0.fk.run_subset(&self.path, &self.q_full, &mut self.poses);
-        self.poses[self.tip] * self.tool
     }
 
     fn distance(&self, seed: &[f64]) -> f64 {
