@@ -10,6 +10,10 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod assets;
+pub mod scene;
+pub mod world;
+
 /// The kinematics crate this one builds on.
 pub use hearth_kinematics as kinematics;
 /// The planning crate this one builds on.

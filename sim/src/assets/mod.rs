@@ -1,0 +1,2 @@
+//! The parametric asset library: household object categories, their shape variants and the
+//! material table.

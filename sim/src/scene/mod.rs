@@ -1,0 +1,1 @@
+//! Scene files, procedural homes, traversability maps and URDF export.
