@@ -32,7 +32,9 @@ pub mod obstacles;
 pub mod planner;
 pub mod problem;
 pub mod rrt;
+pub mod shortcut;
 pub mod space;
+pub mod trajectory;
 pub mod validity;
 
 pub use birrt::BiRrt;

@@ -1,0 +1,286 @@
+//! Path post-processing: repair at a fine resolution, random shortcutting of geometric paths,
+//! and acceleration-bounded ("parabolic") shortcutting of trajectories (Hauser &
+//! Ng-Thow-Hing, ICRA 2010), with the ramps computed by Ruckig with unbounded jerk.
+//!
+//! Every shortcut is checked at the motion validator's resolution first (cheap rejection) and,
+//! when [`ShortcutSettings::fine_resolution`] is set, again at that resolution before it is
+//! accepted, so a path that was valid at the fine resolution stays valid.
+//!
+//! ```
+//! use hearth_planning::motion::MotionValidator;
+//! use hearth_planning::planner::Path;
+//! use hearth_planning::shortcut::{self, ShortcutSettings};
+//! use hearth_planning::space::JointSpace;
+//! use hearth_planning::validity::StateValidator;
+//! use rand::SeedableRng;
+//!
+//! struct Free(u64);
+//! impl StateValidator for Free {
+//!     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+//!     fn checks(&self) -> u64 { self.0 }
+//! }
+//! let space = JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false])?;
+//! let mut motion = MotionValidator::new(space, 0.01);
+//! let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+//! let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+//! let (short, stats) = shortcut::random(&mut motion, &mut Free(0), &zigzag, &ShortcutSettings::default(), &mut rng);
+//! assert!(short.length(motion.space()) < zigzag.length(motion.space()));
+//! assert!(stats.accepted > 0);
+//! # Ok::<(), hearth_planning::space::SpaceError>(())
+//! ```
+
+use std::time::{Duration, Instant};
+
+use rand::{Rng, RngExt};
+
+use crate::birrt::BiRrt;
+use crate::error::PlanError;
+use crate::motion::MotionValidator;
+use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
+use crate::space::Space;
+use crate::trajectory::{Limits, Trajectory, TrajectoryError};
+use crate::validity::StateValidator;
+
+/// How long to shortcut and how carefully.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShortcutSettings {
+    /// Shortcut attempts (random pairs of points).
+    pub attempts: usize,
+    /// Stop after this long even if attempts are left.
+    pub time_limit: Option<Duration>,
+    /// Also check accepted shortcuts at this finer resolution (e.g. a tenth of the planner's).
+    pub fine_resolution: Option<f64>,
+}
+
+impl Default for ShortcutSettings {
+    fn default() -> Self {
+        Self {
+            attempts: 100,
+            time_limit: None,
+            fine_resolution: None,
+        }
+    }
+}
+
+/// What a shortcutter did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShortcutStats {
+    /// Attempts made.
+    pub attempts: u64,
+    /// Shortcuts accepted.
+    pub accepted: u64,
+    /// Time spent.
+    pub time: Duration,
+}
+
+struct Clock {
+    start: Instant,
+    limit: Option<Duration>,
+}
+
+impl Clock {
+    fn new(limit: Option<Duration>) -> Self {
+        Self {
+            start: Instant::now(),
+            limit,
+        }
+    }
+
+    fn expired(&self) -> bool {
+        self.limit.is_some_and(|l| self.start.elapsed() >= l)
+    }
+}
+
+/// Cumulative lengths of a path's states.
+fn cumulative<S: Space>(space: &S, states: &[Vec<f64>]) -> Vec<f64> {
+    let mut acc = Vec::with_capacity(states.len());
+    let mut total = 0.0;
+    acc.push(0.0);
+    for w in states.windows(2) {
+        total += space.distance(&w[0], &w[1]);
+        acc.push(total);
+    }
+    acc
+}
+
+/// The point at arc length `u` along a path: `(edge index, state)`.
+fn point_at<S: Space>(space: &S, states: &[Vec<f64>], acc: &[f64], u: f64) -> (usize, Vec<f64>) {
+    let i = acc.partition_point(|&a| a <= u).saturating_sub(1).min(states.len() - 2);
+    let len = acc[i + 1] - acc[i];
+    let t = if len > 0.0 {
+        ((u - acc[i]) / len).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut q = vec![0.0; space.dim()];
+    space.interpolate(&states[i], &states[i + 1], t, &mut q);
+    (i, q)
+}
+
+/// Random shortcutting of a geometric path: connects random pairs of points (half the time
+/// two of its states, half the time two points anywhere along it) by a straight edge when that
+/// edge is valid and shorter. Never lengthens the path; every new edge is checked by `motion`
+/// (and at the fine resolution when set).
+pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    motion: &mut MotionValidator<S>,
+    validator: &mut V,
+    path: &Path,
+    settings: &ShortcutSettings,
+    rng: &mut R,
+) -> (Path, ShortcutStats) {
+    let clock = Clock::new(settings.time_limit);
+    let mut fine = settings
+        .fine_resolution
+        .map(|r| MotionValidator::new(motion.space().clone(), r));
+    let mut states = path.states.clone();
+    let mut stats = ShortcutStats::default();
+    let space = motion.space().clone();
+    for _ in 0..settings.attempts {
+        if states.len() < 3 || clock.expired() {
+            break;
+        }
+        stats.attempts += 1;
+        let acc = cumulative(&space, &states);
+        let total = *acc.last().unwrap_or(&0.0);
+        let (i, a, j, b) = if rng.random_bool(0.5) {
+            let (mut x, mut y) = (rng.random_range(0..states.len()), rng.random_range(0..states.len()));
+            if x > y {
+                std::mem::swap(&mut x, &mut y);
+            }
+            if y < x + 2 {
+                continue;
+            }
+            (x, states[x].clone(), y - 1, states[y].clone())
+        } else {
+            let (mut u, mut w) = (rng.random::<f64>() * total, rng.random::<f64>() * total);
+            if u > w {
+                std::mem::swap(&mut u, &mut w);
+            }
+            let (i, a) = point_at(&space, &states, &acc, u);
+            let (j, b) = point_at(&space, &states, &acc, w);
+            if i == j {
+                continue;
+            }
+            (i, a, j, b)
+        };
+        let along = space.distance(&a, &states[i + 1]) + (acc[j] - acc[i + 1]) + space.distance(&states[j], &b);
+        if space.distance(&a, &b) >= along - 1e-9 {
+            continue;
+        }
+        if !motion.check_motion(validator, &a, &b) || !fine.as_mut().is_none_or(|f| f.check_motion(validator, &a, &b)) {
+            continue;
+        }
+        let mut next = Vec::with_capacity(states.len());
+        next.extend_from_slice(&states[..=i]);
+        if space.distance(&a, &states[i]) > 0.0 {
+            next.push(a);
+        }
+        if space.distance(&b, &states[j + 1]) > 0.0 {
+            next.push(b);
+        }
+        next.extend_from_slice(&states[j + 1..]);
+        states = next;
+        stats.accepted += 1;
+    }
+    stats.time = clock.start.elapsed();
+    (Path { states }, stats)
+}
+
+/// Acceleration-bounded shortcutting of a trajectory (usually
+/// [`Trajectory::rest_to_rest`] of a planned path): picks two random times, computes the
+/// time-optimal ramp between the states (position and velocity) there within the velocity and
+/// acceleration limits (and position bounds) of `limits`, and splices it in when it is faster
+/// and collision-free. The duration never grows; the velocity stays continuous.
+pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    motion: &mut MotionValidator<S>,
+    validator: &mut V,
+    trajectory: &mut Trajectory,
+    limits: &Limits,
+    settings: &ShortcutSettings,
+    rng: &mut R,
+) -> Result<ShortcutStats, TrajectoryError> {
+    let n = trajectory.dim();
+    if limits.dim() != n {
+        return Err(TrajectoryError::Dimension {
+            what: "limits",
+            expected: n,
+            got: limits.dim(),
+        });
+    }
+    let clock = Clock::new(settings.time_limit);
+    let ramp_limits = limits.without_jerk();
+    let space = motion.space().clone();
+    let coarse = motion.resolution();
+    let mut stats = ShortcutStats::default();
+    let (mut q1, mut v1, mut q2, mut v2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut flat = Vec::new();
+    for _ in 0..settings.attempts {
+        if clock.expired() {
+            break;
+        }
+        let total = trajectory.duration();
+        if total <= 0.0 {
+            break;
+        }
+        stats.attempts += 1;
+        let (mut t1, mut t2) = (rng.random::<f64>() * total, rng.random::<f64>() * total);
+        if t1 > t2 {
+            std::mem::swap(&mut t1, &mut t2);
+        }
+        if t2 - t1 < 1e-3 * total {
+            continue;
+        }
+        trajectory.sample(t1, &mut q1, Some(&mut v1));
+        trajectory.sample(t2, &mut q2, Some(&mut v2));
+        let Ok(ramp) = Trajectory::ramp(&q1, &v1, &q2, &v2, &ramp_limits) else {
+            continue;
+        };
+        if ramp.duration() >= t2 - t1 - 1e-6 {
+            continue;
+        }
+        if !ramp.is_valid(&space, validator, coarse, &mut flat)
+            || !settings
+                .fine_resolution
+                .is_none_or(|r| ramp.is_valid(&space, validator, r, &mut flat))
+        {
+            continue;
+        }
+        trajectory.splice_trajectory(t1, t2, ramp);
+        stats.accepted += 1;
+    }
+    stats.time = clock.start.elapsed();
+    Ok(stats)
+}
+
+/// Makes a path valid at a finer resolution: every edge is checked at `fine_resolution`, and
+/// an edge that fails is replaced by a BiRRT path between its ends planned at that resolution
+/// (within `budget` for all repairs together). Returns the path and the number of edges
+/// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed.
+pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    space: &S,
+    validator: &mut V,
+    path: &Path,
+    fine_resolution: f64,
+    budget: Duration,
+    rng: &mut R,
+) -> Result<(Path, usize), PlanError> {
+    let clock = Clock::new(Some(budget));
+    let mut fine = MotionValidator::new(space.clone(), fine_resolution);
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
+    let mut repaired = 0;
+    if let Some(first) = path.states.first() {
+        out.push(first.clone());
+    }
+    for w in path.states.windows(2) {
+        if fine.check_motion(validator, &w[0], &w[1]) {
+            out.push(w[1].clone());
+            continue;
+        }
+        let left = budget.saturating_sub(clock.start.elapsed()).as_secs_f64().max(1e-3);
+        let request = PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone()));
+        let solution = BiRrt::default().plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
+        out.extend(solution.path.states.into_iter().skip(1));
+        repaired += 1;
+    }
+    Ok((Path { states: out }, repaired))
+}

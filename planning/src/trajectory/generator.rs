@@ -1,0 +1,117 @@
+//! Time-optimal state-to-state motions and motions through waypoints, computed locally by
+//! `rsruckig` (the pure-Rust Ruckig).
+
+use rsruckig::prelude::*;
+
+use super::{Limits, TrajectoryError};
+
+/// A ruckig trajectory of any number of coordinates.
+pub(crate) type Generated = rsruckig::prelude::Trajectory<0>;
+
+/// How the coordinates are synchronised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Sync {
+    /// All coordinates finish together (free shape).
+    Time,
+    /// Proportional profiles: from rest to rest the motion stays on the straight line.
+    Phase,
+}
+
+/// Fills a ruckig input with the limits and optional position bounds.
+fn input(limits: &Limits, bounds: Option<(&[f64], &[f64])>) -> InputParameter<0> {
+    let n = limits.dim();
+    let mut input = InputParameter::<0>::new(Some(n));
+    for i in 0..n {
+        input.max_velocity[i] = limits.velocity()[i];
+        input.max_acceleration[i] = limits.acceleration()[i];
+        input.max_jerk[i] = limits.jerk()[i];
+    }
+    if let Some((lower, upper)) = bounds {
+        let mut lo = DataArrayOrVec::<f64, 0>::new(Some(n), f64::NEG_INFINITY);
+        let mut hi = DataArrayOrVec::<f64, 0>::new(Some(n), f64::INFINITY);
+        for i in 0..n {
+            lo[i] = lower[i];
+            hi[i] = upper[i];
+        }
+        input.min_position = Some(lo);
+        input.max_position = Some(hi);
+    }
+    input
+}
+
+fn run(input: &InputParameter<0>, n: usize) -> Result<Generated, TrajectoryError> {
+    let mut otg = Ruckig::<0, ThrowErrorHandler>::new(Some(n), 0.001);
+    let mut trajectory = Generated::new(Some(n));
+    match otg.calculate(input, &mut trajectory) {
+        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => Ok(trajectory),
+        Ok(other) => Err(TrajectoryError::Generator(format!("{other:?}"))),
+        Err(e) => Err(TrajectoryError::Generator(e.to_string())),
+    }
+}
+
+/// The time-optimal motion from `(q0, v0)` to `(q1, v1)` (accelerations zero at both ends)
+/// within `limits` and, where given, position `bounds` (`±∞` for unbounded coordinates).
+pub(crate) fn between(
+    q0: &[f64],
+    v0: &[f64],
+    q1: &[f64],
+    v1: &[f64],
+    limits: &Limits,
+    sync: Sync,
+) -> Result<Generated, TrajectoryError> {
+    let n = limits.dim();
+    let mut input = input(limits, limits.position_bounds());
+    input.synchronization = match sync {
+        Sync::Time => Synchronization::Time,
+        Sync::Phase => Synchronization::Phase,
+    };
+    for i in 0..n {
+        input.current_position[i] = q0[i];
+        input.current_velocity[i] = v0[i];
+        input.current_acceleration[i] = 0.0;
+        input.target_position[i] = q1[i];
+        input.target_velocity[i] = v1[i];
+        input.target_acceleration[i] = 0.0;
+    }
+    run(&input, n)
+}
+
+/// A motion from rest at `waypoints[0]` to rest at the last waypoint that passes through the
+/// ones between without stopping.
+pub(crate) fn through(waypoints: &[Vec<f64>], limits: &Limits) -> Result<Generated, TrajectoryError> {
+    let n = limits.dim();
+    let (Some(first), Some(last)) = (waypoints.first(), waypoints.last()) else {
+        return Err(TrajectoryError::EmptyPath);
+    };
+    let mut input = input(limits, None);
+    for i in 0..n {
+        input.current_position[i] = first[i];
+        input.target_position[i] = last[i];
+    }
+    if waypoints.len() > 2 {
+        input.intermediate_positions = waypoints[1..waypoints.len() - 1]
+            .iter()
+            .map(|w| {
+                let mut p = DataArrayOrVec::<f64, 0>::new(Some(n), 0.0);
+                for i in 0..n {
+                    p[i] = w[i];
+                }
+                p
+            })
+            .collect();
+    }
+    run(&input, n)
+}
+
+/// Position and velocity of a ruckig trajectory at time `t` (clamped to its duration),
+/// without allocating.
+pub(crate) fn eval(trajectory: &Generated, t: f64, q: &mut [f64], mut v: Option<&mut [f64]>) {
+    let mut section = 0;
+    trajectory.state_to_integrate_from(t, &mut section, |dof, dt, p, vel, a, j| {
+        let (pp, vv, _) = rsruckig::util::integrate(dt, p, vel, a, j);
+        q[dof] = pp;
+        if let Some(v) = v.as_deref_mut() {
+            v[dof] = vv;
+        }
+    });
+}

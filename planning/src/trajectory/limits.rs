@@ -1,0 +1,188 @@
+//! Per-joint velocity, acceleration and jerk limits.
+
+use hearth_kinematics::Chain;
+
+use super::TrajectoryError;
+
+/// Acceleration and jerk defaults of the built-in robots, per joint: `(robot, joint,
+/// acceleration, jerk)`. URDF carries velocity limits only.
+///
+/// - Panda: the manufacturer's published joint limits (Franka Control Interface documentation,
+///   "robot and interface specifications"), the values in MotionBenchMaker's `joints.json`.
+/// - Fetch: the manufacturer publishes no acceleration or jerk limits; these are Hearth's
+///   conservative defaults (about one second to full speed for the arm, jerk 20× acceleration).
+const DEFAULTS: &[(&str, &str, f64, f64)] = &[
+    ("panda", "panda_joint1", 15.0, 7500.0),
+    ("panda", "panda_joint2", 7.5, 3750.0),
+    ("panda", "panda_joint3", 10.0, 5000.0),
+    ("panda", "panda_joint4", 12.5, 6250.0),
+    ("panda", "panda_joint5", 15.0, 7500.0),
+    ("panda", "panda_joint6", 20.0, 10000.0),
+    ("panda", "panda_joint7", 20.0, 10000.0),
+    ("fetch", "torso_lift_joint", 0.5, 10.0),
+    ("fetch", "shoulder_pan_joint", 1.5, 30.0),
+    ("fetch", "shoulder_lift_joint", 1.5, 30.0),
+    ("fetch", "upperarm_roll_joint", 1.5, 30.0),
+    ("fetch", "elbow_flex_joint", 1.5, 30.0),
+    ("fetch", "forearm_roll_joint", 1.5, 30.0),
+    ("fetch", "wrist_flex_joint", 2.5, 50.0),
+    ("fetch", "wrist_roll_joint", 2.5, 50.0),
+];
+
+/// Velocity, acceleration and jerk limits per coordinate, all positive; jerk may be `+∞`
+/// (acceleration-bounded, "parabolic" motion).
+///
+/// ```
+/// use hearth_planning::kinematics::{Chain, RobotModel};
+/// use hearth_planning::trajectory::Limits;
+///
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let limits = Limits::for_chain(&Chain::named(&panda, "arm").unwrap());
+/// assert_eq!(limits.acceleration()[1], 7.5);
+/// assert_eq!(limits.jerk()[1], 3750.0);
+/// assert!((limits.velocity()[0] - 2.175).abs() < 1e-3);
+/// let slow = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY]).unwrap();
+/// assert!(Limits::new(vec![1.0], vec![-2.0], vec![10.0]).is_err());
+/// # let _ = slow;
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    velocity: Vec<f64>,
+    acceleration: Vec<f64>,
+    jerk: Vec<f64>,
+    /// Position bounds (`±∞` for continuous joints), when known.
+    bounds: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+impl Limits {
+    /// Limits from explicit values: velocity and acceleration finite and positive, jerk positive
+    /// (`+∞` allowed), all of the same length.
+    pub fn new(velocity: Vec<f64>, acceleration: Vec<f64>, jerk: Vec<f64>) -> Result<Self, TrajectoryError> {
+        let n = velocity.len();
+        for (what, v) in [("acceleration", &acceleration), ("jerk", &jerk)] {
+            if v.len() != n {
+                return Err(TrajectoryError::Dimension {
+                    what,
+                    expected: n,
+                    got: v.len(),
+                });
+            }
+        }
+        for (what, values, inf_ok) in [
+            ("velocity", &velocity, false),
+            ("acceleration", &acceleration, false),
+            ("jerk", &jerk, true),
+        ] {
+            for (index, &value) in values.iter().enumerate() {
+                let ok = value > 0.0 && (value.is_finite() || (inf_ok && value == f64::INFINITY));
+                if !ok {
+                    return Err(TrajectoryError::BadLimit { what, index, value });
+                }
+            }
+        }
+        Ok(Self {
+            velocity,
+            acceleration,
+            jerk,
+            bounds: None,
+        })
+    }
+
+    /// The limits of a chain: velocity from the robot model (a joint without one gets
+    /// 1 rad/s or m/s), acceleration and jerk from the built-in robot's defaults, else
+    /// 2× velocity per second and 50× acceleration per second.
+    pub fn for_chain(chain: &Chain) -> Self {
+        let robot = chain.model().name().to_owned();
+        let mut velocity = Vec::with_capacity(chain.dof());
+        let mut acceleration = Vec::with_capacity(chain.dof());
+        let mut jerk = Vec::with_capacity(chain.dof());
+        for (name, &v) in chain.joint_names().iter().zip(chain.velocity_limits()) {
+            let v = if v.is_finite() && v > 0.0 { v } else { 1.0 };
+            let (a, j) = DEFAULTS
+                .iter()
+                .find(|(r, joint, _, _)| *r == robot && joint == name)
+                .map(|&(_, _, a, j)| (a, j))
+                .unwrap_or((2.0 * v, 100.0 * v));
+            velocity.push(v);
+            acceleration.push(a);
+            jerk.push(j);
+        }
+        let lower = chain
+            .lower()
+            .iter()
+            .zip(chain.continuous())
+            .map(|(&l, &c)| if c { f64::NEG_INFINITY } else { l });
+        let upper = chain
+            .upper()
+            .iter()
+            .zip(chain.continuous())
+            .map(|(&u, &c)| if c { f64::INFINITY } else { u });
+        Self {
+            velocity,
+            acceleration,
+            jerk,
+            bounds: Some((lower.collect(), upper.collect())),
+        }
+    }
+
+    /// The same limits with position bounds (`±∞` for unbounded coordinates) that generated
+    /// motions must respect.
+    pub fn with_position_bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, TrajectoryError> {
+        for (what, v) in [("lower bounds", &lower), ("upper bounds", &upper)] {
+            if v.len() != self.dim() {
+                return Err(TrajectoryError::Dimension {
+                    what,
+                    expected: self.dim(),
+                    got: v.len(),
+                });
+            }
+        }
+        self.bounds = Some((lower, upper));
+        Ok(self)
+    }
+
+    /// The position bounds, when set.
+    pub fn position_bounds(&self) -> Option<(&[f64], &[f64])> {
+        self.bounds.as_ref().map(|(l, u)| (l.as_slice(), u.as_slice()))
+    }
+
+    /// The same limits with jerk unbounded (acceleration-bounded motion).
+    pub fn without_jerk(&self) -> Self {
+        Self {
+            jerk: vec![f64::INFINITY; self.velocity.len()],
+            ..self.clone()
+        }
+    }
+
+    /// Velocity and acceleration scaled by `velocity_scale` and `acceleration_scale` (each in
+    /// `(0, 1]`; other values leave the limit unchanged), like MoveIt's scaling factors.
+    pub fn scaled(&self, velocity_scale: f64, acceleration_scale: f64) -> Self {
+        let s = |x: f64| if x > 0.0 && x <= 1.0 { x } else { 1.0 };
+        Self {
+            velocity: self.velocity.iter().map(|v| v * s(velocity_scale)).collect(),
+            acceleration: self.acceleration.iter().map(|a| a * s(acceleration_scale)).collect(),
+            jerk: self.jerk.clone(),
+            bounds: self.bounds.clone(),
+        }
+    }
+
+    /// Number of coordinates.
+    pub fn dim(&self) -> usize {
+        self.velocity.len()
+    }
+
+    /// Velocity limits.
+    pub fn velocity(&self) -> &[f64] {
+        &self.velocity
+    }
+
+    /// Acceleration limits.
+    pub fn acceleration(&self) -> &[f64] {
+        &self.acceleration
+    }
+
+    /// Jerk limits (`+∞` when unbounded).
+    pub fn jerk(&self) -> &[f64] {
+        &self.jerk
+    }
+}

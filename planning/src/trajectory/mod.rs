@@ -1,0 +1,529 @@
+//! Time-parametrised trajectories: rest-to-rest straight segments, acceleration-bounded
+//! ("parabolic") ramps from shortcutting, and jerk-limited motions through waypoints computed
+//! by Ruckig (the pure-Rust `rsruckig`, entirely local).
+//!
+//! A [`Trajectory`] is a sequence of spans, each a time window of one piece (a straight line
+//! with a trapezoidal speed profile, or a ruckig motion). Coordinates are *unwrapped*:
+//! continuous joints may leave `(-π, π]` so that velocities stay continuous;
+//! [`Trajectory::to_path`] wraps them back.
+//!
+//! ```
+//! use hearth_planning::planner::Path;
+//! use hearth_planning::space::JointSpace;
+//! use hearth_planning::trajectory::{Limits, Trajectory};
+//!
+//! let space = JointSpace::new(&[-2.0, -2.0], &[2.0, 2.0], &[false, false])?;
+//! let limits = Limits::new(vec![1.0, 1.0], vec![2.0, 2.0], vec![f64::INFINITY; 2])?;
+//! let path = Path { states: vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 1.0]] };
+//! let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
+//! // 1 rad at 1 rad/s with 2 rad/s²: 0.5 s up, 0.5 s cruise, 0.5 s down, twice.
+//! assert!((t.duration() - 3.0).abs() < 1e-9);
+//! let (mut q, mut v) = ([0.0; 2], [0.0; 2]);
+//! t.sample(1.5, &mut q, Some(&mut v));
+//! assert_eq!((q, v), ([1.0, 0.0], [0.0, 0.0]));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod generator;
+mod limits;
+mod ramp;
+
+use std::sync::Arc;
+
+pub use limits::Limits;
+
+use crate::planner::Path;
+use crate::space::Space;
+use crate::validity::StateValidator;
+use generator::{Generated, Sync};
+use ramp::LineRamp;
+
+/// Why a trajectory could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrajectoryError {
+    /// Inputs of different lengths.
+    #[error("{what} has {got} values, expected {expected}")]
+    Dimension {
+        /// Which input.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// A limit that is not positive (or not finite, where that is required).
+    #[error("{what} limit {index} is {value}; it must be positive and finite")]
+    BadLimit {
+        /// Which limit.
+        what: &'static str,
+        /// Coordinate.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A path state with a NaN or infinite coordinate.
+    #[error("path state {index} has a non-finite coordinate")]
+    NonFinite {
+        /// Index of the state.
+        index: usize,
+    },
+    /// A path without states.
+    #[error("the path has no states")]
+    EmptyPath,
+    /// The trajectory generator found no motion.
+    #[error("the trajectory generator failed: {0}")]
+    Generator(String),
+    /// The trajectory leaves the free space.
+    #[error("the trajectory is in collision at t = {time:.4} s")]
+    InCollision {
+        /// First colliding time found.
+        time: f64,
+    },
+}
+
+/// One motion primitive.
+#[derive(Debug)]
+enum Piece {
+    Line(LineRamp),
+    Generated(Box<Generated>),
+}
+
+impl Piece {
+    fn duration(&self) -> f64 {
+        match self {
+            Piece::Line(l) => l.duration(),
+            Piece::Generated(g) => g.get_duration(),
+        }
+    }
+
+    fn eval(&self, t: f64, q: &mut [f64], v: Option<&mut [f64]>) {
+        match self {
+            Piece::Line(l) => l.eval(t, q, v),
+            Piece::Generated(g) => generator::eval(g, t, q, v),
+        }
+    }
+}
+
+/// A time window `[offset, offset + duration]` of a piece.
+#[derive(Clone, Debug)]
+struct Span {
+    piece: Arc<Piece>,
+    offset: f64,
+    duration: f64,
+}
+
+/// A time-parametrised motion through configuration space; see the [module](self) docs.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    dim: usize,
+    spans: Vec<Span>,
+    /// End time of each span.
+    ends: Vec<f64>,
+}
+
+/// The path with continuous coordinates unwrapped so that each step is the short way.
+fn unwrapped<S: Space>(space: &S, path: &Path) -> Result<Vec<Vec<f64>>, TrajectoryError> {
+    let dim = space.dim();
+    let first = path.states.first().ok_or(TrajectoryError::EmptyPath)?;
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
+    let mut delta = vec![0.0; dim];
+    out.push(first.clone());
+    for (index, pair) in path.states.windows(2).enumerate() {
+        for (i, q) in pair.iter().enumerate() {
+            if q.len() != dim {
+                return Err(TrajectoryError::Dimension {
+                    what: "path state",
+                    expected: dim,
+                    got: q.len(),
+                });
+            }
+            if q.iter().any(|x| !x.is_finite()) {
+                return Err(TrajectoryError::NonFinite { index: index + i });
+            }
+        }
+        space.difference(&pair[0], &pair[1], &mut delta);
+        let prev = out.last().map(|p| p.clone()).unwrap_or_default();
+        out.push(prev.iter().zip(&delta).map(|(p, d)| p + d).collect());
+    }
+    if first.len() != dim {
+        return Err(TrajectoryError::Dimension {
+            what: "path state",
+            expected: dim,
+            got: first.len(),
+        });
+    }
+    if first.iter().any(|x| !x.is_finite()) {
+        return Err(TrajectoryError::NonFinite { index: 0 });
+    }
+    Ok(out)
+}
+
+fn check_dim(limits: &Limits, dim: usize) -> Result<(), TrajectoryError> {
+    if limits.dim() == dim {
+        Ok(())
+    } else {
+        Err(TrajectoryError::Dimension {
+            what: "limits",
+            expected: dim,
+            got: limits.dim(),
+        })
+    }
+}
+
+impl Trajectory {
+    fn from_pieces(dim: usize, pieces: Vec<Piece>, durations: fn(&Piece) -> f64) -> Self {
+        let mut t = Self {
+            dim,
+            spans: Vec::with_capacity(pieces.len()),
+            ends: Vec::with_capacity(pieces.len()),
+        };
+        for piece in pieces {
+            let duration = durations(&piece);
+            t.spans.push(Span {
+                piece: Arc::new(piece),
+                offset: 0.0,
+                duration,
+            });
+        }
+        t.recompute_ends();
+        t
+    }
+
+    fn recompute_ends(&mut self) {
+        self.ends.clear();
+        let mut end = 0.0;
+        for s in &self.spans {
+            end += s.duration;
+            self.ends.push(end);
+        }
+    }
+
+    /// Stops at every waypoint and moves along the straight edges between them with
+    /// trapezoidal (acceleration-bounded) speed: exactly the geometric path, so its collision
+    /// checks carry over. The usual input of [`parabolic
+    /// shortcutting`](crate::shortcut::parabolic).
+    pub fn rest_to_rest<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
+        check_dim(limits, space.dim())?;
+        let states = unwrapped(space, path)?;
+        let mut pieces = Vec::with_capacity(states.len());
+        let mut delta = vec![0.0; space.dim()];
+        for pair in states.windows(2) {
+            for ((d, a), b) in delta.iter_mut().zip(&pair[0]).zip(&pair[1]) {
+                *d = b - a;
+            }
+            pieces.push(Piece::Line(LineRamp::new(&pair[0], &delta, limits)));
+        }
+        if pieces.is_empty() {
+            pieces.push(Piece::Line(LineRamp::new(&states[0], &vec![0.0; space.dim()], limits)));
+        }
+        Ok(Self::from_pieces(space.dim(), pieces, Piece::duration))
+    }
+
+    /// A jerk-limited motion (Ruckig) from rest at the first waypoint to rest at the last that
+    /// passes through the others without stopping. It may cut corners between waypoints, so
+    /// check it ([`Trajectory::check`]) or use [`Trajectory::jerk_limited_stops`].
+    pub fn jerk_limited<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
+        check_dim(limits, space.dim())?;
+        let states = unwrapped(space, path)?;
+        let g = generator::through(&states, limits)?;
+        Ok(Self::from_pieces(
+            space.dim(),
+            vec![Piece::Generated(Box::new(g))],
+            Piece::duration,
+        ))
+    }
+
+    /// A jerk-limited motion (Ruckig, phase-synchronised) that stops at every waypoint and
+    /// stays on the straight edges between them.
+    pub fn jerk_limited_stops<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
+        check_dim(limits, space.dim())?;
+        let states = unwrapped(space, path)?;
+        let zero = vec![0.0; space.dim()];
+        let mut pieces = Vec::with_capacity(states.len());
+        for pair in states.windows(2) {
+            let g = generator::between(&pair[0], &zero, &pair[1], &zero, limits, Sync::Phase)?;
+            pieces.push(Piece::Generated(Box::new(g)));
+        }
+        if pieces.is_empty() {
+            pieces.push(Piece::Line(LineRamp::new(&states[0], &zero, limits)));
+        }
+        Ok(Self::from_pieces(space.dim(), pieces, Piece::duration))
+    }
+
+    /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` within `limits` (Ruckig; with
+    /// unbounded jerk this is the parabolic ramp of acceleration-bounded shortcutting).
+    pub fn ramp(q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64], limits: &Limits) -> Result<Self, TrajectoryError> {
+        let n = limits.dim();
+        for (what, x) in [("q0", q0), ("v0", v0), ("q1", q1), ("v1", v1)] {
+            if x.len() != n {
+                return Err(TrajectoryError::Dimension {
+                    what,
+                    expected: n,
+                    got: x.len(),
+                });
+            }
+            if x.iter().any(|c| !c.is_finite()) {
+                return Err(TrajectoryError::NonFinite { index: 0 });
+            }
+        }
+        let g = generator::between(q0, v0, q1, v1, limits, Sync::Time)?;
+        Ok(Self::from_pieces(
+            n,
+            vec![Piece::Generated(Box::new(g))],
+            Piece::duration,
+        ))
+    }
+
+    /// Replaces `[t1, t2]` by `other` (one span), which must join the states at both times.
+    pub(crate) fn splice_trajectory(&mut self, t1: f64, t2: f64, other: Trajectory) {
+        if let Some(span) = other.spans.into_iter().next() {
+            self.splice_span(t1, t2, span);
+        }
+    }
+
+    /// Whether every state along the trajectory, at most `resolution` apart, is valid, checked
+    /// coarse to fine; `flat` is scratch space.
+    pub(crate) fn is_valid<S: Space, V: StateValidator + ?Sized>(
+        &self,
+        space: &S,
+        validator: &mut V,
+        resolution: f64,
+        flat: &mut Vec<f64>,
+    ) -> bool {
+        flat.clear();
+        self.discretise(space, resolution, flat);
+        first_invalid(flat, self.dim, validator).is_none()
+    }
+
+    /// Number of coordinates.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Total duration in seconds.
+    pub fn duration(&self) -> f64 {
+        self.ends.last().copied().unwrap_or(0.0)
+    }
+
+    /// Number of spans (straight segments and ramps).
+    pub fn spans(&self) -> usize {
+        self.spans.len()
+    }
+
+    /// Position (and velocity) at time `t`, clamped to `[0, duration]`. Does not allocate.
+    pub fn sample(&self, t: f64, q: &mut [f64], v: Option<&mut [f64]>) {
+        let t = t.clamp(0.0, self.duration());
+        let i = self
+            .ends
+            .partition_point(|&e| e < t)
+            .min(self.spans.len().saturating_sub(1));
+        let start = if i == 0 { 0.0 } else { self.ends[i - 1] };
+        let span = &self.spans[i];
+        span.piece.eval(span.offset + (t - start).min(span.duration), q, v);
+    }
+
+    /// Replaces the motion between `t1` and `t2` by `piece` of length `duration` (which must
+    /// start and end in the states the trajectory has at those times).
+    fn splice_span(&mut self, t1: f64, t2: f64, new: Span) {
+        let mut spans = Vec::with_capacity(self.spans.len() + 2);
+        let mut inserted = false;
+        let mut start = 0.0;
+        for (s, &end) in self.spans.iter().zip(&self.ends) {
+            if start < t1 {
+                let d = end.min(t1) - start;
+                if d > 0.0 {
+                    spans.push(Span {
+                        duration: d,
+                        ..s.clone()
+                    });
+                }
+            }
+            if !inserted && end >= t1 {
+                spans.push(new.clone());
+                inserted = true;
+            }
+            if end > t2 {
+                let from = t2.max(start);
+                spans.push(Span {
+                    piece: s.piece.clone(),
+                    offset: s.offset + (from - start),
+                    duration: end - from,
+                });
+            }
+            start = end;
+        }
+        if !inserted {
+            spans.push(new);
+        }
+        self.spans = spans;
+        self.recompute_ends();
+    }
+
+    /// States along the trajectory no more than `resolution` apart (in the space's distance),
+    /// from the first state to the last, with continuous coordinates wrapped back.
+    pub fn to_path<S: Space>(&self, space: &S, resolution: f64) -> Path {
+        let mut flat = Vec::new();
+        self.discretise(space, resolution, &mut flat);
+        let dim = self.dim.max(1);
+        Path {
+            states: flat
+                .chunks(dim)
+                .map(|q| {
+                    let mut q = q.to_vec();
+                    space.enforce_bounds(&mut q);
+                    q
+                })
+                .collect(),
+        }
+    }
+
+    /// Length of the trajectory's path in the space's metric (sampled at `resolution`).
+    pub fn length<S: Space>(&self, space: &S, resolution: f64) -> f64 {
+        let mut flat = Vec::new();
+        self.discretise(space, resolution, &mut flat);
+        flat.chunks(self.dim.max(1))
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| space.distance(w[0], w[1]))
+            .sum()
+    }
+
+    /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
+    /// time step to the local speed.
+    fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) {
+        discretise_with(
+            self.dim,
+            self.duration(),
+            |t, q| self.sample(t, q, None),
+            space,
+            resolution,
+            out,
+        );
+    }
+
+    /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
+    /// (midpoints first); `Err` carries the time of the first colliding state found.
+    pub fn check<S: Space, V: StateValidator + ?Sized>(
+        &self,
+        space: &S,
+        validator: &mut V,
+        resolution: f64,
+    ) -> Result<(), TrajectoryError> {
+        let mut flat = Vec::new();
+        let mut times = Vec::new();
+        let sample = |t: f64, q: &mut [f64]| self.sample(t, q, None);
+        discretise_timed(
+            self.dim,
+            self.duration(),
+            sample,
+            space,
+            resolution,
+            &mut flat,
+            Some(&mut times),
+        );
+        match first_invalid(&flat, self.dim, validator) {
+            Some(i) => Err(TrajectoryError::InCollision { time: times[i] }),
+            None => Ok(()),
+        }
+    }
+
+    /// Largest absolute velocity and acceleration per coordinate, measured by sampling every
+    /// `dt` seconds (accelerations by finite differences of velocities).
+    pub fn peak_velocity_acceleration(&self, dt: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = self.dim;
+        let (mut q, mut v, mut prev) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (mut vmax, mut amax) = (vec![0.0f64; n], vec![0.0f64; n]);
+        let steps = (self.duration() / dt).ceil().max(1.0) as usize;
+        self.sample(0.0, &mut q, Some(&mut prev));
+        for k in 1..=steps {
+            let t = (k as f64 * dt).min(self.duration());
+            self.sample(t, &mut q, Some(&mut v));
+            for i in 0..n {
+                vmax[i] = vmax[i].max(v[i].abs());
+                amax[i] = amax[i].max(((v[i] - prev[i]) / dt).abs());
+            }
+            prev.copy_from_slice(&v);
+        }
+        (vmax, amax)
+    }
+}
+
+/// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
+/// consecutive ones at most `resolution` apart, to `out` (and their times to `times`),
+/// adapting the time step to the local speed.
+fn discretise_timed<S: Space>(
+    dim: usize,
+    duration: f64,
+    mut sample: impl FnMut(f64, &mut [f64]),
+    space: &S,
+    resolution: f64,
+    out: &mut Vec<f64>,
+    mut times: Option<&mut Vec<f64>>,
+) {
+    let resolution = if resolution > 0.0 { resolution } else { 0.01 };
+    let (mut prev, mut q) = (vec![0.0; dim], vec![0.0; dim]);
+    sample(0.0, &mut prev);
+    out.extend_from_slice(&prev);
+    if let Some(times) = times.as_deref_mut() {
+        times.push(0.0);
+    }
+    let (mut t, mut dt) = (0.0, (duration / 8.0).max(1e-6));
+    while t < duration {
+        let mut next = (t + dt).min(duration);
+        let mut d;
+        loop {
+            sample(next, &mut q);
+            d = space.distance(&prev, &q);
+            if d <= resolution || next - t < 1e-9 {
+                break;
+            }
+            dt *= 0.5;
+            next = t + dt;
+        }
+        out.extend_from_slice(&q);
+        if let Some(times) = times.as_deref_mut() {
+            times.push(next);
+        }
+        t = next;
+        std::mem::swap(&mut prev, &mut q);
+        if d < 0.5 * resolution {
+            dt *= 1.5;
+        }
+    }
+}
+
+fn discretise_with<S: Space>(
+    dim: usize,
+    duration: f64,
+    sample: impl FnMut(f64, &mut [f64]),
+    space: &S,
+    resolution: f64,
+    out: &mut Vec<f64>,
+) {
+    discretise_timed(dim, duration, sample, space, resolution, out, None)
+}
+
+/// Index of an invalid state among `flat` (`dim` per state), checked midpoints first and the
+/// two ends last, or `None` when all are valid.
+pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize, validator: &mut V) -> Option<usize> {
+    let n = flat.len() / dim.max(1);
+    if n == 0 {
+        return None;
+    }
+    let state = |i: usize| &flat[i * dim..(i + 1) * dim];
+    let mut queue = std::collections::VecDeque::with_capacity(64);
+    queue.push_back((0usize, n - 1));
+    while let Some((lo, hi)) = queue.pop_front() {
+        if hi - lo < 2 {
+            continue;
+        }
+        let mid = lo + (hi - lo) / 2;
+        if !validator.is_valid(state(mid)) {
+            return Some(mid);
+        }
+        queue.push_back((lo, mid));
+        queue.push_back((mid, hi));
+    }
+    [n - 1, 0].into_iter().find(|&i| !validator.is_valid(state(i)))
+}

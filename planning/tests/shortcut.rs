@@ -1,0 +1,376 @@
+//! Trajectories and shortcutting: limits respected, durations and lengths never grow, paths
+//! stay valid (also at a finer resolution), jerk-limited motions stay on their edges, and bad
+//! input gives typed errors.
+
+use hearth_planning::BiRrt;
+use hearth_planning::motion::MotionValidator;
+use hearth_planning::planner::{Budget, Goal, Path, PlanRequest, Planner};
+use hearth_planning::shortcut::{self, ShortcutSettings};
+use hearth_planning::space::{JointSpace, Space};
+use hearth_planning::trajectory::{Limits, Trajectory, TrajectoryError};
+use hearth_planning::validity::StateValidator;
+use proptest::prelude::*;
+use rand::SeedableRng;
+use rand_pcg::Pcg64Mcg;
+
+/// Two walls with gaps at opposite ends: a zig-zag world where shortcuts matter.
+#[derive(Default)]
+struct Walls {
+    checks: u64,
+}
+
+impl StateValidator for Walls {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        let wall1 = (0.3..=0.35).contains(&q[0]) && q[1] < 0.8;
+        let wall2 = (0.65..=0.7).contains(&q[0]) && q[1] > 0.2;
+        !(wall1 || wall2)
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+fn square() -> JointSpace {
+    JointSpace::new(&[0., 0.], &[1., 1.], &[false, false]).unwrap()
+}
+
+fn limits2() -> Limits {
+    Limits::new(vec![1.0, 0.5], vec![2.0, 1.0], vec![f64::INFINITY; 2])
+        .unwrap()
+        .with_position_bounds(vec![0.0, 0.0], vec![1.0, 1.0])
+        .unwrap()
+}
+
+fn planned(seed: u64) -> (MotionValidator<JointSpace>, Path) {
+    let mut motion = MotionValidator::new(square(), 0.005);
+    let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let solution = BiRrt::default()
+        .plan(
+            &mut motion,
+            &mut Walls::default(),
+            &request,
+            &Budget::iterations(20_000),
+            &mut rng,
+        )
+        .unwrap();
+    (motion, solution.path)
+}
+
+fn path_valid(motion: &mut MotionValidator<JointSpace>, path: &Path) -> bool {
+    let mut v = Walls::default();
+    path.states.iter().all(|q| v.is_valid(q))
+        && path
+            .states
+            .windows(2)
+            .all(|w| motion.check_motion(&mut v, &w[0], &w[1]))
+}
+
+#[test]
+fn rest_to_rest_respects_limits_and_follows_the_path() {
+    let (motion, path) = planned(1);
+    let t = Trajectory::rest_to_rest(motion.space(), &path, &limits2()).unwrap();
+    let (v, a) = t.peak_velocity_acceleration(1e-4);
+    assert!(v[0] <= 1.0 + 1e-9 && v[1] <= 0.5 + 1e-9, "{v:?}");
+    assert!(a[0] <= 2.0 + 1e-6 && a[1] <= 1.0 + 1e-6, "{a:?}");
+    let mut q = [0.0; 2];
+    t.sample(0.0, &mut q, None);
+    assert_eq!(q.to_vec(), path.states[0]);
+    t.sample(t.duration(), &mut q, None);
+    assert!(motion.space().distance(&q, path.states.last().unwrap()) < 1e-12);
+    assert!(t.check(motion.space(), &mut Walls::default(), 0.001).is_ok());
+}
+
+#[test]
+fn parabolic_shortcutting_shortens_time_keeps_validity_and_limits() {
+    for seed in 0..5 {
+        let (mut motion, path) = planned(seed);
+        let limits = limits2();
+        let mut t = Trajectory::rest_to_rest(motion.space(), &path, &limits).unwrap();
+        let before = t.duration();
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let settings = ShortcutSettings {
+            attempts: 200,
+            fine_resolution: Some(0.0005),
+            ..Default::default()
+        };
+        let stats =
+            shortcut::parabolic(&mut motion, &mut Walls::default(), &mut t, &limits, &settings, &mut rng).unwrap();
+        assert!(stats.accepted > 0, "seed {seed}: nothing accepted");
+        assert!(t.duration() < before, "seed {seed}: {} !< {before}", t.duration());
+        assert!(
+            t.check(motion.space(), &mut Walls::default(), 0.0005).is_ok(),
+            "seed {seed}: in collision"
+        );
+        let (v, a) = t.peak_velocity_acceleration(1e-4);
+        assert!(v[0] <= 1.0 + 1e-6 && v[1] <= 0.5 + 1e-6, "seed {seed}: {v:?}");
+        assert!(a[0] <= 2.0 + 1e-3 && a[1] <= 1.0 + 1e-3, "seed {seed}: {a:?}");
+        let mut q = [0.0; 2];
+        t.sample(t.duration(), &mut q, None);
+        assert!(
+            motion.space().distance(&q, &[0.9, 0.9]) < 1e-9,
+            "seed {seed}: ends at {q:?}"
+        );
+        let dense = t.to_path(motion.space(), 0.001);
+        assert!(path_valid(&mut motion, &dense));
+    }
+}
+
+#[test]
+fn parabolic_shortcutting_is_deterministic() {
+    let run = || {
+        let (mut motion, path) = planned(3);
+        let mut t = Trajectory::rest_to_rest(motion.space(), &path, &limits2()).unwrap();
+        let mut rng = Pcg64Mcg::seed_from_u64(9);
+        shortcut::parabolic(
+            &mut motion,
+            &mut Walls::default(),
+            &mut t,
+            &limits2(),
+            &ShortcutSettings::default(),
+            &mut rng,
+        )
+        .unwrap();
+        t.to_path(motion.space(), 0.01)
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn random_shortcutting_never_lengthens_nor_invalidates() {
+    for seed in 0..10 {
+        let (mut motion, path) = planned(seed);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let settings = ShortcutSettings {
+            fine_resolution: Some(0.0005),
+            ..Default::default()
+        };
+        let (short, _) = shortcut::random(&mut motion, &mut Walls::default(), &path, &settings, &mut rng);
+        assert!(short.length(motion.space()) <= path.length(motion.space()) + 1e-12);
+        assert_eq!(short.states.first(), path.states.first());
+        assert_eq!(short.states.last(), path.states.last());
+        assert!(path_valid(&mut motion, &short), "seed {seed}");
+    }
+}
+
+#[test]
+fn repair_replaces_edges_that_fail_finely() {
+    // A wall thinner than the coarse resolution: the straight edge passes between samples.
+    struct Thin(u64);
+    impl StateValidator for Thin {
+        fn is_valid(&mut self, q: &[f64]) -> bool {
+            self.0 += 1;
+            !((0.52..=0.522).contains(&q[0]) && q[1] < 0.9)
+        }
+        fn checks(&self) -> u64 {
+            self.0
+        }
+    }
+    let space = square();
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.1]],
+    };
+    let mut coarse = MotionValidator::new(space.clone(), 0.05);
+    assert!(
+        coarse.check_motion(&mut Thin(0), &path.states[0], &path.states[1]),
+        "the fixture needs a coarse miss"
+    );
+    let mut rng = Pcg64Mcg::seed_from_u64(0);
+    let (fixed, repaired) = shortcut::repair(
+        &space,
+        &mut Thin(0),
+        &path,
+        0.0005,
+        std::time::Duration::from_secs(5),
+        &mut rng,
+    )
+    .unwrap();
+    assert_eq!(repaired, 1);
+    let mut fine = MotionValidator::new(space, 0.0005);
+    assert!(
+        fixed
+            .states
+            .windows(2)
+            .all(|w| fine.check_motion(&mut Thin(0), &w[0], &w[1]))
+    );
+    assert!(fixed.states.iter().any(|q| q[1] >= 0.9));
+}
+
+#[test]
+fn jerk_limited_stops_stay_on_edges_and_respect_limits() {
+    let space = square();
+    let limits = Limits::new(vec![1.0, 0.5], vec![2.0, 1.0], vec![20.0, 10.0]).unwrap();
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.8, 0.3], vec![0.2, 0.9]],
+    };
+    let t = Trajectory::jerk_limited_stops(&space, &path, &limits).unwrap();
+    let mut q = [0.0; 2];
+    let steps = 2000;
+    for k in 0..=steps {
+        t.sample(t.duration() * k as f64 / steps as f64, &mut q, None);
+        // Distance to the nearer of the two edges.
+        let d = path
+            .states
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (&w[0], &w[1]);
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let s = (((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                ((q[0] - a[0] - s * dx).powi(2) + (q[1] - a[1] - s * dy).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(d < 1e-6, "left the edges by {d} at step {k}");
+    }
+    let (v, a) = t.peak_velocity_acceleration(1e-4);
+    assert!(v[0] <= 1.0 + 1e-6 && v[1] <= 0.5 + 1e-6, "{v:?}");
+    assert!(a[0] <= 2.0 + 1e-2 && a[1] <= 1.0 + 1e-2, "{a:?}");
+}
+
+#[test]
+fn jerk_limited_passes_through_waypoints() {
+    let space = square();
+    let limits = Limits::new(vec![1.0, 1.0], vec![2.0, 2.0], vec![20.0, 20.0]).unwrap();
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.5, 0.6], vec![0.9, 0.2]],
+    };
+    let t = Trajectory::jerk_limited(&space, &path, &limits).unwrap();
+    let dense = t.to_path(&space, 0.0005);
+    let nearest = dense
+        .states
+        .iter()
+        .map(|q| space.distance(q, &path.states[1]))
+        .fold(f64::INFINITY, f64::min);
+    assert!(nearest < 1e-3, "misses the middle waypoint by {nearest}");
+    assert!(
+        t.duration()
+            < Trajectory::jerk_limited_stops(&space, &path, &limits)
+                .unwrap()
+                .duration()
+    );
+}
+
+#[test]
+fn continuous_joints_take_the_short_way() {
+    let space = JointSpace::new(&[0.0], &[0.0], &[true]).unwrap();
+    let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY]).unwrap();
+    let path = Path {
+        states: vec![vec![3.0], vec![-3.0]],
+    };
+    let t = Trajectory::rest_to_rest(&space, &path, &limits).unwrap();
+    // 2π − 6 ≈ 0.283 rad, not 6 rad.
+    assert!(t.duration() < 1.2, "{}", t.duration());
+    let dense = t.to_path(&space, 0.01);
+    assert!(dense.states.iter().all(|q| q[0].abs() <= std::f64::consts::PI + 1e-12));
+}
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let space = square();
+    let limits = limits2();
+    let nan = Path {
+        states: vec![vec![0.1, 0.1], vec![f64::NAN, 0.2]],
+    };
+    assert_eq!(
+        Trajectory::rest_to_rest(&space, &nan, &limits).unwrap_err(),
+        TrajectoryError::NonFinite { index: 1 }
+    );
+    assert_eq!(
+        Trajectory::rest_to_rest(&space, &Path::default(), &limits).unwrap_err(),
+        TrajectoryError::EmptyPath
+    );
+    let short = Path {
+        states: vec![vec![0.1]],
+    };
+    assert!(matches!(
+        Trajectory::rest_to_rest(&space, &short, &limits),
+        Err(TrajectoryError::Dimension {
+            what: "path state",
+            expected: 2,
+            got: 1
+        })
+    ));
+    let three = Limits::new(vec![1.0; 3], vec![1.0; 3], vec![1.0; 3]).unwrap();
+    assert!(matches!(
+        Trajectory::rest_to_rest(
+            &space,
+            &Path {
+                states: vec![vec![0.1, 0.1]]
+            },
+            &three
+        ),
+        Err(TrajectoryError::Dimension { what: "limits", .. })
+    ));
+    assert!(matches!(
+        Limits::new(vec![1.0, f64::NAN], vec![1.0; 2], vec![1.0; 2]),
+        Err(TrajectoryError::BadLimit {
+            what: "velocity",
+            index: 1,
+            ..
+        })
+    ));
+    assert!(matches!(
+        Limits::new(vec![1.0; 2], vec![f64::INFINITY; 2], vec![1.0; 2]),
+        Err(TrajectoryError::BadLimit {
+            what: "acceleration",
+            index: 0,
+            ..
+        })
+    ));
+    assert!(matches!(
+        Trajectory::ramp(&[0.0, 0.0], &[0.0, 0.0], &[1.0, f64::NAN], &[0.0, 0.0], &limits),
+        Err(TrajectoryError::NonFinite { .. })
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn ramps_respect_limits(
+        q0 in prop::collection::vec(-1.0f64..1.0, 3),
+        q1 in prop::collection::vec(-1.0f64..1.0, 3),
+        v0 in prop::collection::vec(-0.9f64..0.9, 3),
+        v1 in prop::collection::vec(-0.9f64..0.9, 3),
+    ) {
+        let limits = Limits::new(vec![1.0; 3], vec![3.0, 2.0, 1.0], vec![f64::INFINITY; 3]).unwrap();
+        let t = Trajectory::ramp(&q0, &v0, &q1, &v1, &limits).unwrap();
+        let (v, a) = t.peak_velocity_acceleration(1e-4);
+        for i in 0..3 {
+            prop_assert!(v[i] <= 1.0 + 1e-6, "v {v:?}");
+            prop_assert!(a[i] <= limits.acceleration()[i] * 1.001 + 1e-6, "a {a:?}");
+        }
+        let (mut q, mut v) = ([0.0; 3], [0.0; 3]);
+        t.sample(t.duration(), &mut q, Some(&mut v));
+        for i in 0..3 {
+            prop_assert!((q[i] - q1[i]).abs() < 1e-6 && (v[i] - v1[i]).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn rest_to_rest_interpolation_endpoints(states in prop::collection::vec(prop::collection::vec(0.0f64..1.0, 2), 1..6)) {
+        let path = Path { states: states.clone() };
+        let t = Trajectory::rest_to_rest(&square(), &path, &limits2()).unwrap();
+        let mut q = [0.0; 2];
+        t.sample(0.0, &mut q, None);
+        prop_assert_eq!(q.to_vec(), states[0].clone());
+        t.sample(t.duration(), &mut q, None);
+        prop_assert!(square().distance(&q, states.last().unwrap()) < 1e-9);
+    }
+
+    #[test]
+    fn shortcutting_never_lengthens_or_invalidates(seed in 0u64..1000) {
+        let (mut motion, path) = planned(seed % 7);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let settings = ShortcutSettings { attempts: 30, fine_resolution: Some(0.0005), ..Default::default() };
+        let (short, _) = shortcut::random(&mut motion, &mut Walls::default(), &path, &settings, &mut rng);
+        prop_assert!(short.length(motion.space()) <= path.length(motion.space()) + 1e-12);
+        prop_assert!(path_valid(&mut motion, &short));
+        let limits = limits2();
+        let mut t = Trajectory::rest_to_rest(motion.space(), &short, &limits).unwrap();
+        let before = t.duration();
+        shortcut::parabolic(&mut motion, &mut Walls::default(), &mut t, &limits, &settings, &mut rng).unwrap();
+        prop_assert!(t.duration() <= before + 1e-12);
+        prop_assert!(t.check(motion.space(), &mut Walls::default(), 0.005).is_ok());
+    }
+}
