@@ -41,6 +41,9 @@ use crate::space::Space;
 use crate::trajectory::{Limits, Trajectory, TrajectoryError};
 use crate::validity::StateValidator;
 
+/// Parabolic shortcut attempts between fine checks.
+const ROUND: usize = 10;
+
 /// How long to shortcut and how carefully.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShortcutSettings {
@@ -214,7 +217,10 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let mut stats = ShortcutStats::default();
     let (mut q1, mut v1, mut q2, mut v2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut flat = Vec::new();
-    for _ in 0..settings.attempts {
+    trajectory.mark_verified();
+    let mut snapshot = trajectory.clone();
+    let mut round_accepted = 0;
+    for attempt in 0..settings.attempts {
         if clock.expired() {
             break;
         }
@@ -227,26 +233,33 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         if t1 > t2 {
             std::mem::swap(&mut t1, &mut t2);
         }
-        if t2 - t1 < 1e-3 * total {
-            continue;
+        if t2 - t1 >= 1e-3 * total {
+            trajectory.sample(t1, &mut q1, Some(&mut v1));
+            trajectory.sample(t2, &mut q2, Some(&mut v2));
+            if let Ok(ramp) = Trajectory::ramp(&q1, &v1, &q2, &v2, &ramp_limits)
+                && ramp.duration() < t2 - t1 - 1e-6
+                && ramp.is_valid(&space, validator, coarse, &mut flat)
+            {
+                trajectory.splice_trajectory(t1, t2, ramp);
+                round_accepted += 1;
+            }
         }
-        trajectory.sample(t1, &mut q1, Some(&mut v1));
-        trajectory.sample(t2, &mut q2, Some(&mut v2));
-        let Ok(ramp) = Trajectory::ramp(&q1, &v1, &q2, &v2, &ramp_limits) else {
-            continue;
-        };
-        if ramp.duration() >= t2 - t1 - 1e-6 {
-            continue;
-        }
-        if !ramp.is_valid(&space, validator, coarse, &mut flat)
-            || !settings
+        // Fine checks once per round, of the ramps that survived it; a round that fails is
+        // undone.
+        let round_end = (attempt + 1) % ROUND == 0 || attempt + 1 == settings.attempts || clock.expired();
+        if round_end && round_accepted > 0 {
+            let fine_ok = settings
                 .fine_resolution
-                .is_none_or(|r| ramp.is_valid(&space, validator, r, &mut flat))
-        {
-            continue;
+                .is_none_or(|r| trajectory.verify_new(&space, validator, r, &mut flat));
+            if fine_ok {
+                stats.accepted += round_accepted;
+                trajectory.mark_verified();
+                snapshot = trajectory.clone();
+            } else {
+                *trajectory = snapshot.clone();
+            }
+            round_accepted = 0;
         }
-        trajectory.splice_trajectory(t1, t2, ramp);
-        stats.accepted += 1;
     }
     stats.time = clock.start.elapsed();
     Ok(stats)
@@ -278,9 +291,115 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         }
         let left = budget.saturating_sub(clock.start.elapsed()).as_secs_f64().max(1e-3);
         let request = PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone()));
-        let solution = BiRrt::default().plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
+        let range = (space.distance(&w[0], &w[1]) / 4.0).clamp(10.0 * fine_resolution, 0.25);
+        let mut planner = BiRrt { range: Some(range) };
+        let solution = planner.plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
         out.extend(solution.path.states.into_iter().skip(1));
         repaired += 1;
     }
     Ok((Path { states: out }, repaired))
+}
+
+/// Which shortcutting [`smooth`] applies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Smoothing {
+    /// Keep the planner's path (still repaired, and timed rest to rest).
+    None,
+    /// [`random`] shortcutting, then rest-to-rest timing.
+    Random,
+    /// [`random`] then acceleration-bounded [`parabolic`] shortcutting.
+    #[default]
+    Parabolic,
+}
+
+/// A post-processed path and its timing.
+#[derive(Clone, Debug)]
+pub struct Smoothed {
+    /// The time-parametrised motion.
+    pub trajectory: Trajectory,
+    /// Its geometric path: states at most the motion validator's resolution apart for a
+    /// parabolic trajectory, the shortcut waypoints otherwise.
+    pub path: Path,
+    /// Edges that failed at the fine resolution and were re-planned.
+    pub repaired: usize,
+    /// Random shortcutting statistics.
+    pub random: ShortcutStats,
+    /// Parabolic shortcutting statistics.
+    pub parabolic: ShortcutStats,
+}
+
+/// The post-processing pipeline from a planner's path to an executable trajectory: random
+/// shortcutting at the motion validator's resolution (unless `smoothing` is `None`), [`repair`]
+/// of the result at `settings.fine_resolution` (when set, within `repair_budget`), timing
+/// within `limits`, and, for `Parabolic`, acceleration-bounded shortcutting whose ramps are
+/// checked at both resolutions.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{smooth, ShortcutSettings, Smoothing};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::trajectory::Limits;
+/// use hearth_planning::validity::StateValidator;
+/// use rand::SeedableRng;
+///
+/// struct Free(u64);
+/// impl StateValidator for Free {
+///     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+///     fn checks(&self) -> u64 { self.0 }
+/// }
+/// let space = JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false])?;
+/// let mut motion = MotionValidator::new(space, 0.01);
+/// let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+/// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![f64::INFINITY; 2]).unwrap();
+/// let settings = ShortcutSettings { fine_resolution: Some(0.001), ..Default::default() };
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let out = smooth(Smoothing::Parabolic, &mut motion, &mut Free(0), &zigzag, &limits, &settings,
+///                  std::time::Duration::from_millis(100), &mut rng).unwrap();
+/// assert!(out.trajectory.duration() < 2.5);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    smoothing: Smoothing,
+    motion: &mut MotionValidator<S>,
+    validator: &mut V,
+    path: &Path,
+    limits: &Limits,
+    settings: &ShortcutSettings,
+    repair_budget: Duration,
+    rng: &mut R,
+) -> Result<Smoothed, PlanError> {
+    let space = motion.space().clone();
+    let bad = |e: TrajectoryError| PlanError::BadInput(e.to_string());
+    // Random shortcuts at the coarse resolution, then one fine pass over what is left.
+    let mut current = path.clone();
+    let mut out_random = ShortcutStats::default();
+    if smoothing != Smoothing::None {
+        let coarse = ShortcutSettings {
+            fine_resolution: None,
+            ..settings.clone()
+        };
+        let (p, s) = random(motion, validator, &current, &coarse, rng);
+        current = p;
+        out_random = s;
+    }
+    let (mut current, repaired) = match settings.fine_resolution {
+        Some(r) => repair(&space, validator, &current, r, repair_budget, rng)?,
+        None => (current, 0),
+    };
+    let mut trajectory = Trajectory::rest_to_rest(&space, &current, limits).map_err(bad)?;
+    let mut out_parabolic = ShortcutStats::default();
+    if smoothing == Smoothing::Parabolic {
+        out_parabolic = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad)?;
+        current = trajectory.to_path(&space, motion.resolution());
+    }
+    Ok(Smoothed {
+        trajectory,
+        path: current,
+        repaired,
+        random: out_random,
+        parabolic: out_parabolic,
+    })
 }

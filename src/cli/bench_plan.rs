@@ -4,12 +4,15 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
+use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
+use hearth_planning::trajectory::Limits;
 use hearth_planning::{
     BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity, Rrt,
     StateValidator,
@@ -30,6 +33,17 @@ pub enum PlannerKind {
     Lazyprm,
 }
 
+/// Post-processing of each path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShortcutKind {
+    /// None (the path is still repaired at the fine resolution where needed).
+    None,
+    /// Random shortcutting.
+    Random,
+    /// Random, then acceleration-bounded (parabolic) shortcutting.
+    Parabolic,
+}
+
 #[derive(Args, Debug)]
 pub struct BenchPlanArgs {
     /// Problem files or folders of them (`joints.json` in a folder is read for limits and
@@ -42,9 +56,16 @@ pub struct BenchPlanArgs {
     /// Time limit per plan, in seconds.
     #[arg(long, default_value_t = 1.0)]
     time_limit: f64,
-    /// Edge-check resolution (joint-space distance between checked states).
-    #[arg(long, default_value_t = 0.01)]
+    /// Edge-check resolution (joint-space distance between checked states, rad); paths are
+    /// re-validated at a tenth of it.
+    #[arg(long, default_value_t = 0.02)]
     resolution: f64,
+    /// Path post-processing.
+    #[arg(long, value_enum, default_value_t = ShortcutKind::Parabolic)]
+    shortcut: ShortcutKind,
+    /// Shortcut attempts per stage.
+    #[arg(long, default_value_t = 100)]
+    shortcut_attempts: usize,
     /// RNG seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -61,6 +82,7 @@ pub struct BenchPlanArgs {
 
 struct RobotSetup {
     chain: Chain,
+    limits: Limits,
     matrix: SelfCollisionMatrix,
     reference: Vec<f64>,
     note: String,
@@ -106,6 +128,7 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
         ));
     }
     Ok(RobotSetup {
+        limits: Limits::for_chain(&chain),
         chain,
         matrix,
         reference,
@@ -185,7 +208,6 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         LazyPrm::new(LazyPrmSettings::default()).plan(&mut motion, &mut v, &request, &budget, &mut rng)
                     }
                 };
-                let checks = v.checks() - before;
                 match outcome {
                     Err(hearth_planning::PlanError::InvalidGoals { .. }) => {
                         row["skipped"] = json!("every goal collides in our model");
@@ -196,24 +218,59 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     Err(e) => {
                         row["success"] = json!(false);
                         row["error"] = json!(e.to_string());
-                        row["checks"] = json!(checks);
+                        row["checks"] = json!(v.checks() - before);
                     }
                     Ok(sol) => {
-                        // Re-validate at 10x finer resolution.
-                        let mut fine = MotionValidator::new(space.clone(), a.resolution / 10.0);
-                        let states = &sol.path.states;
-                        let valid = states.iter().all(|s| v.is_valid(s))
-                            && states.windows(2).all(|w| fine.check_motion(&mut v, &w[0], &w[1]));
-                        row["success"] = json!(valid);
-                        if !valid {
-                            row["error"] = json!("path fails re-validation at 10x finer resolution");
-                        }
                         row["plan_time_s"] = json!(sol.stats.time.as_secs_f64());
-                        row["shortcut_time_s"] = json!(0.0);
-                        row["path_length"] = json!(sol.path.length(&space));
-                        row["checks"] = json!(checks);
-                        if a.emit_paths {
-                            row["path"] = json!(states);
+                        let fine_resolution = a.resolution / 10.0;
+                        let settings = ShortcutSettings {
+                            attempts: a.shortcut_attempts,
+                            time_limit: None,
+                            // Verified at half the re-check spacing so that a graze shorter than the
+                            // re-check spacing rarely slips between both sample sets.
+                            fine_resolution: Some(fine_resolution / 2.0),
+                        };
+                        let smoothing = match a.shortcut {
+                            ShortcutKind::None => Smoothing::None,
+                            ShortcutKind::Random => Smoothing::Random,
+                            ShortcutKind::Parabolic => Smoothing::Parabolic,
+                        };
+                        let left = (a.time_limit - sol.stats.time.as_secs_f64()).max(0.05);
+                        let t0 = Instant::now();
+                        let smoothed = smooth(
+                            smoothing,
+                            &mut motion,
+                            &mut v,
+                            &sol.path,
+                            &rs.limits,
+                            &settings,
+                            Duration::from_secs_f64(left),
+                            &mut rng,
+                        );
+                        row["shortcut_time_s"] = json!(t0.elapsed().as_secs_f64());
+                        row["checks"] = json!(v.checks() - before);
+                        match smoothed {
+                            Err(e) => {
+                                row["success"] = json!(false);
+                                row["error"] = json!(format!("repair at the fine resolution failed: {e}"));
+                            }
+                            Ok(out) => {
+                                // Re-validate at 10x finer resolution, the whole timed motion.
+                                let check = out.trajectory.check(&space, &mut v, fine_resolution);
+                                row["success"] = json!(check.is_ok());
+                                if let Err(e) = check {
+                                    row["error"] = json!(format!(
+                                        "path fails re-validation at 10x finer resolution: {e} of {:.4} s",
+                                        out.trajectory.duration()
+                                    ));
+                                }
+                                row["repaired_edges"] = json!(out.repaired);
+                                row["path_length"] = json!(out.trajectory.length(&space, a.resolution));
+                                row["duration_s"] = json!(out.trajectory.duration());
+                                if a.emit_paths {
+                                    row["path"] = json!(out.path.states);
+                                }
+                            }
                         }
                     }
                 }
@@ -231,8 +288,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             .push(r);
     }
     println!(
-        "{:<18} {:>6} {:>7} {:>9} {:>11} {:>11} {:>9} {:>9}",
-        "family", "plans", "skipped", "success", "median ms", "p95 ms", "length", "checks"
+        "{:<18} {:>6} {:>7} {:>9} {:>11} {:>11} {:>9} {:>11} {:>9} {:>9}",
+        "family", "plans", "skipped", "success", "median ms", "p95 ms", "length", "shortcut ms", "motion s", "checks"
     );
     let mut summary = serde_json::Map::new();
     for (family, rows) in &families {
@@ -249,9 +306,15 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             .collect();
         let lengths: Vec<f64> = ok.iter().filter_map(|r| r["path_length"].as_f64()).collect();
         let checks: Vec<f64> = ok.iter().filter_map(|r| r["checks"].as_f64()).collect();
+        let shortcut: Vec<f64> = ok
+            .iter()
+            .filter_map(|r| r["shortcut_time_s"].as_f64())
+            .map(|t| t * 1e3)
+            .collect();
+        let durations: Vec<f64> = ok.iter().filter_map(|r| r["duration_s"].as_f64()).collect();
         let rate = ok.len() as f64 / attempted.len().max(1) as f64;
         println!(
-            "{:<18} {:>6} {:>7} {:>8.1}% {:>11.3} {:>11.3} {:>9.3} {:>9.0}",
+            "{:<18} {:>6} {:>7} {:>8.1}% {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",
             family,
             rows.len(),
             rows.len() - attempted.len(),
@@ -259,13 +322,16 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             percentile(&times, 0.5),
             percentile(&times, 0.95),
             percentile(&lengths, 0.5),
+            percentile(&shortcut, 0.5),
+            percentile(&durations, 0.5),
             percentile(&checks, 0.5)
         );
         summary.insert(
             family.clone(),
             json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "success_rate": rate,
                    "plan_time_ms_median": percentile(&times, 0.5), "plan_time_ms_p95": percentile(&times, 0.95),
-                   "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5)}),
+                   "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5),
+                   "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5)}),
         );
     }
     if let Some(path) = a.json {

@@ -111,6 +111,8 @@ struct Span {
     piece: Arc<Piece>,
     offset: f64,
     duration: f64,
+    /// Checked at the fine resolution (or part of the motion shortcutting started from).
+    verified: bool,
 }
 
 /// A time-parametrised motion through configuration space; see the [module](self) docs.
@@ -143,7 +145,7 @@ fn unwrapped<S: Space>(space: &S, path: &Path) -> Result<Vec<Vec<f64>>, Trajecto
             }
         }
         space.difference(&pair[0], &pair[1], &mut delta);
-        let prev = out.last().map(|p| p.clone()).unwrap_or_default();
+        let prev = out.last().cloned().unwrap_or_default();
         out.push(prev.iter().zip(&delta).map(|(p, d)| p + d).collect());
     }
     if first.len() != dim {
@@ -184,6 +186,7 @@ impl Trajectory {
                 piece: Arc::new(piece),
                 offset: 0.0,
                 duration,
+                verified: false,
             });
         }
         t.recompute_ends();
@@ -282,6 +285,39 @@ impl Trajectory {
         }
     }
 
+    /// Marks every span as verified: later checks by [`Trajectory::verify_new`] cover only
+    /// what is spliced in afterwards.
+    pub(crate) fn mark_verified(&mut self) {
+        for s in &mut self.spans {
+            s.verified = true;
+        }
+    }
+
+    /// Checks the spans spliced in since the last call (or [`Trajectory::mark_verified`]) at
+    /// `resolution`; marks them verified and returns `true` when all are valid.
+    pub(crate) fn verify_new<S: Space, V: StateValidator + ?Sized>(
+        &mut self,
+        space: &S,
+        validator: &mut V,
+        resolution: f64,
+        flat: &mut Vec<f64>,
+    ) -> bool {
+        for i in 0..self.spans.len() {
+            if self.spans[i].verified {
+                continue;
+            }
+            let span = self.spans[i].clone();
+            flat.clear();
+            let sample = |t: f64, q: &mut [f64]| span.piece.eval(span.offset + t, q, None);
+            discretise_timed(self.dim, span.duration, sample, space, resolution, flat, None);
+            if first_invalid(flat, self.dim, validator).is_some() {
+                return false;
+            }
+            self.spans[i].verified = true;
+        }
+        true
+    }
+
     /// Whether every state along the trajectory, at most `resolution` apart, is valid, checked
     /// coarse to fine; `flat` is scratch space.
     pub(crate) fn is_valid<S: Space, V: StateValidator + ?Sized>(
@@ -349,6 +385,7 @@ impl Trajectory {
                     piece: s.piece.clone(),
                     offset: s.offset + (from - start),
                     duration: end - from,
+                    verified: s.verified,
                 });
             }
             start = end;
