@@ -44,6 +44,13 @@ pub enum PlanError {
         /// What the planner did meanwhile.
         stats: PlanStats,
     },
+    /// A pose goal for which no collision-free configuration was found (IK failed or every
+    /// solution collides).
+    #[error("no collision-free configuration reaches the goal pose: {reason}")]
+    NoGoalConfiguration {
+        /// The last IK failure.
+        reason: String,
+    },
     /// The request, budget or planner settings are unusable (wrong dimension, NaN, out of
     /// bounds, no goal, no budget, a non-positive range, …); the message names the culprit,
     /// such as `goal 2: coordinate 3 (panda_joint4) is 4.1, outside [-3.07, -0.07]` from

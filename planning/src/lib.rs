@@ -12,6 +12,10 @@
 //! - [`planner`]: the [`Planner`] trait, [`PlanRequest`], [`Budget`], [`Solution`]; planners
 //!   [`Rrt`], [`BiRrt`] (RRT-Connect) and [`LazyPrm`], failing with a typed [`PlanError`];
 //!   [`nn`]: exact nearest-neighbour search under any space's metric.
+//! - [`goal`]: end-effector pose goals, sampled by collision-aware IK.
+//! - [`shortcut`]: repair at a fine resolution, random and acceleration-bounded (parabolic)
+//!   shortcutting; [`trajectory`]: timed motions (trapezoids, Ruckig ramps, jerk-limited
+//!   motions through waypoints) within per-joint [`trajectory::Limits`].
 //! - [`problem`]: benchmark problem files (MotionBenchMaker JSON).
 //!
 //! ```
@@ -25,6 +29,7 @@ pub use hearth_kinematics as kinematics;
 
 pub mod birrt;
 pub mod error;
+pub mod goal;
 pub mod lazy_prm;
 pub mod motion;
 pub mod nn;

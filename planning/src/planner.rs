@@ -75,9 +75,10 @@ impl Budget {
 
 /// Where to go.
 ///
-/// End-effector pose goals are not a variant yet: callers sample goal configurations with IK
-/// and pass them as [`Goal::AnyOf`], which every planner handles natively (BiRRT seeds its goal
-/// tree with all of them, LazyPRM searches to the nearest reachable one).
+/// End-effector pose goals become [`Goal::AnyOf`] through
+/// [`PoseGoal::sample`](crate::goal::PoseGoal::sample) (collision-aware IK), which every planner
+/// handles natively (BiRRT seeds its goal tree with all of them, LazyPRM searches to the nearest
+/// reachable one).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Goal {
     /// One goal configuration.

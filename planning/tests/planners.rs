@@ -621,3 +621,72 @@ fn narrow_passage_is_solved_for_every_seed() {
         1.0
     );
 }
+
+fn panda_ik() -> hearth_kinematics::IkSolver {
+    let m = RobotModel::builtin("panda").unwrap();
+    let arm = Chain::named(&m, "arm").unwrap();
+    let mut ik = hearth_kinematics::IkSolver::new(arm, "panda_hand_tcp", Default::default()).unwrap();
+    let mut q_full = m.neutral_configuration();
+    Chain::new(&m, &["panda_finger_joint1"])
+        .unwrap()
+        .scatter(&[0.04], &mut q_full);
+    ik.set_reference(&q_full).unwrap();
+    ik
+}
+
+#[test]
+fn pose_goals_are_sampled_collision_free_and_reached() {
+    use hearth_kinematics::IkTarget;
+    use hearth_kinematics::nalgebra::{Isometry3, Translation3, UnitQuaternion};
+    use hearth_planning::goal::PoseGoal;
+    let (space, mut v) = table_world();
+    let mut ik = panda_ik();
+    // Beside the post, above the table, gripper pointing down.
+    let down = UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0);
+    let target = Isometry3::from_parts(Translation3::new(0.45, 0.3, 0.35), down);
+    let start = table_request().start;
+    let mut rng = Pcg64Mcg::seed_from_u64(5);
+    let goal = PoseGoal::new(IkTarget::Pose(target))
+        .sample(&mut ik, &mut v, &start, &mut rng)
+        .unwrap();
+    assert!(!goal.states().is_empty());
+    for q in goal.states() {
+        assert!(v.is_valid(q));
+        let reached = ik.tool_pose(q).unwrap();
+        assert!((reached.translation.vector - target.translation.vector).norm() < 2e-3);
+    }
+    let request = PlanRequest::new(start, goal);
+    let mut motion = MotionValidator::new(space.clone(), PANDA_RESOLUTION);
+    let solution = BiRrt::default()
+        .plan(&mut motion, &mut v, &request, &Budget::iterations(20_000), &mut rng)
+        .unwrap();
+    check_solution(&space, PANDA_RESOLUTION, &mut v, &request, &solution);
+    let end = solution.path.states.last().unwrap();
+    let reached = ik.tool_pose(end).unwrap();
+    assert!((reached.translation.vector - target.translation.vector).norm() < 2e-3);
+
+    // Out of reach, inside the table, or NaN: typed errors.
+    let far = IkTarget::Position(hearth_kinematics::nalgebra::Point3::new(3.0, 0.0, 0.5));
+    let quick = PoseGoal {
+        max_calls: 3,
+        ..PoseGoal::new(far)
+    };
+    assert!(matches!(
+        quick.sample(&mut ik, &mut v, &request.start, &mut rng),
+        Err(PlanError::NoGoalConfiguration { .. })
+    ));
+    let in_table = IkTarget::Position(hearth_kinematics::nalgebra::Point3::new(0.5, -0.3, 0.2));
+    let quick = PoseGoal {
+        max_calls: 3,
+        ..PoseGoal::new(in_table)
+    };
+    assert!(matches!(
+        quick.sample(&mut ik, &mut v, &request.start, &mut rng),
+        Err(PlanError::NoGoalConfiguration { .. })
+    ));
+    let nan = IkTarget::Position(hearth_kinematics::nalgebra::Point3::new(f64::NAN, 0.0, 0.5));
+    assert!(matches!(
+        PoseGoal::new(nan).sample(&mut ik, &mut v, &request.start, &mut rng),
+        Err(PlanError::BadInput(_))
+    ));
+}
