@@ -1,0 +1,128 @@
+//! BiRRT, RRT and LazyPRM on a fixed subset of MotionBenchMaker problems (the Panda
+//! table_pick problems in `planning/tests/data`, fingers at 0.04 m), and the smoothing
+//! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths.
+//! Each plan uses the same seed, so every iteration plans the same path.
+
+use std::hint::black_box;
+use std::sync::Arc;
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::problem::ProblemSet;
+use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
+use hearth_planning::space::JointSpace;
+use hearth_planning::trajectory::Limits;
+use hearth_planning::{
+    BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity, Rrt,
+};
+use rand::SeedableRng;
+
+const RESOLUTION: f64 = 0.02;
+
+struct Fixture {
+    space: JointSpace,
+    validity: Vec<RobotValidity>,
+    requests: Vec<PlanRequest>,
+    limits: Limits,
+}
+
+fn fixture() -> Fixture {
+    let set = ProblemSet::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../planning/tests/data/panda_table_pick.json"
+    ))
+    .expect("problem data");
+    let m = RobotModel::builtin("panda").unwrap();
+    let arm = Chain::named(&m, "arm").unwrap();
+    let acm = SelfCollisionMatrix::compute(
+        &m,
+        &SelfCollisionSettings {
+            samples: 2000,
+            ..Default::default()
+        },
+    );
+    let mut reference = m.neutral_configuration();
+    Chain::new(&m, &["panda_finger_joint1"])
+        .unwrap()
+        .scatter(&[0.04], &mut reference);
+    let mut validity = Vec::new();
+    let mut requests = Vec::new();
+    for p in set.valid_problems() {
+        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(p.scene()));
+        v.set_reference(&reference).unwrap();
+        validity.push(v);
+        requests.push(PlanRequest::new(p.start.clone(), Goal::AnyOf(p.goals.clone())));
+    }
+    Fixture {
+        space: JointSpace::from_chain(&arm).unwrap(),
+        validity,
+        requests,
+        limits: Limits::for_chain(&arm),
+    }
+}
+
+fn plan_all<P: Planner<JointSpace>>(f: &mut Fixture, make: impl Fn() -> P) -> usize {
+    let mut solved = 0;
+    for (v, r) in f.validity.iter_mut().zip(&f.requests) {
+        let mut motion = MotionValidator::new(f.space.clone(), RESOLUTION);
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+        let mut planner = make();
+        solved += planner.plan(&mut motion, v, r, &Budget::time(1.0), &mut rng).is_ok() as usize;
+    }
+    solved
+}
+
+fn planners(c: &mut Criterion) {
+    let mut f = fixture();
+    let mut g = c.benchmark_group("plan/panda_table_pick");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("birrt", |b| b.iter(|| black_box(plan_all(&mut f, BiRrt::default))));
+    g.bench_function("rrt", |b| b.iter(|| black_box(plan_all(&mut f, Rrt::default))));
+    g.bench_function("lazyprm", |b| {
+        b.iter(|| black_box(plan_all(&mut f, || LazyPrm::new(LazyPrmSettings::default()))))
+    });
+    g.finish();
+
+    // Smoothing of the BiRRT paths.
+    let mut paths = Vec::new();
+    for (i, (v, r)) in f.validity.iter_mut().zip(&f.requests).enumerate() {
+        let mut motion = MotionValidator::new(f.space.clone(), RESOLUTION);
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+        if let Ok(s) = BiRrt::default().plan(&mut motion, v, r, &Budget::time(1.0), &mut rng) {
+            paths.push((i, s.path));
+        }
+    }
+    let settings = ShortcutSettings {
+        fine_resolution: Some(RESOLUTION / 20.0),
+        ..Default::default()
+    };
+    let mut g = c.benchmark_group("smooth/panda_table_pick");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    for (name, smoothing) in [("random", Smoothing::Random), ("parabolic", Smoothing::Parabolic)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                for (i, p) in &paths {
+                    let v = &mut f.validity[*i];
+                    let mut motion = MotionValidator::new(f.space.clone(), RESOLUTION);
+                    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+                    let out = smooth(
+                        smoothing,
+                        &mut motion,
+                        v,
+                        p,
+                        &f.limits,
+                        &settings,
+                        Duration::from_secs(1),
+                        &mut rng,
+                    );
+                    black_box(out.ok());
+                }
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, planners);
+criterion_main!(benches);
