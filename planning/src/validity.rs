@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
 use nalgebra::{Isometry3, Point3};
-use parry3d::math::{Pose, Vector};
+use parry3d::math::Vector;
 use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{ObstacleId, Obstacles};
@@ -329,9 +329,9 @@ impl RobotValidity {
         if !r.is_finite() {
             return true;
         }
-        let ball = Ball::new((r * (1.0 + 1e-6) + 1e-6) as f32);
-        let pose = Pose::from_translation(Vector::new(c.x as f32, c.y as f32, c.z as f32));
-        self.obstacles.first_hit(&ball, &pose).is_some()
+        let radius = (r * (1.0 + 1e-6) + 1e-6) as f32;
+        self.obstacles
+            .ball_hits(Vector::new(c.x as f32, c.y as f32, c.z as f32), radius)
     }
 
     /// Broad phase + exact test of geometric link number `i` against the obstacles.
@@ -340,8 +340,8 @@ impl RobotValidity {
         let l = self.geometric[i];
         let c = &self.broad.world_center[l];
         if self.broad.radius[l].is_finite() {
-            let pose = Pose::from_translation(Vector::new(c.x as f32, c.y as f32, c.z as f32));
-            if self.obstacles.first_hit(&self.broad.balls[i], &pose).is_none() {
+            let center = Vector::new(c.x as f32, c.y as f32, c.z as f32);
+            if !self.obstacles.ball_hits(center, self.broad.balls[i].radius) {
                 return false;
             }
         }

@@ -341,3 +341,56 @@ fn bvh_matches_brute_force_on_random_ball_queries() {
         "degenerate test: {hits} hits, {misses} misses"
     );
 }
+
+/// The closed-form ball test gives the same answer as parry's, for every primitive (and a
+/// convex hull, which falls back to parry), with and without a margin.
+#[test]
+fn ball_hits_agrees_with_parry() {
+    use parry3d::math::Rotation;
+    use rand::{RngExt, SeedableRng};
+    let tilt = Rotation::from_euler(parry3d::glamx::EulerRot::XYZ, 0.3, -0.5, 0.9);
+    let obstacles = vec![
+        Obstacle::cuboid(
+            "box",
+            Pose::from_parts(Vector::new(0.5, 0.0, 0.2), tilt),
+            Vector::new(0.2, 0.1, 0.05),
+        ),
+        Obstacle::ball("ball", Vector::new(-0.4, 0.3, 0.1), 0.15),
+        Obstacle::cylinder("can", Pose::from_parts(Vector::new(0.0, -0.5, 0.3), tilt), 0.12, 0.05),
+        Obstacle::capsule("rod", Vector::new(-0.3, -0.3, 0.0), Vector::new(0.2, 0.4, 0.5), 0.04),
+        Obstacle::convex_hull(
+            "wedge",
+            Pose::translation(0.0, 0.6, 0.0),
+            &[Vector::ZERO, Vector::X * 0.2, Vector::Y * 0.2, Vector::Z * 0.2],
+        )
+        .unwrap(),
+    ];
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+    let probe = ParryScene::new(obstacles.clone());
+    assert!(probe.intersects(&Ball::new(0.05), &Pose::translation(0.5, 0.0, 0.2)));
+    assert!(probe.ball_hits(Vector::new(0.5, 0.0, 0.2), 0.05));
+    for margin in [0.0, 0.03] {
+        let scene = ParryScene::new(obstacles.clone()).with_margin(margin);
+        let (mut hits, mut total) = (0, 0);
+        for _ in 0..20_000 {
+            let c = Vector::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-0.5..0.8),
+            );
+            let r = rng.random_range(0.001..0.2);
+            let expected = scene.intersects(&Ball::new(r), &Pose::from_translation(c));
+            // Parry's tests carry ~1e-6 of rounding: skip balls that graze within it.
+            let d = scene
+                .distance(&Ball::new(r), &Pose::from_translation(c), 1.0)
+                .map_or(1.0, |(d, _)| d);
+            if d > 0.0 && (d - margin).abs() < 1e-4 {
+                continue;
+            }
+            assert_eq!(scene.ball_hits(c, r), expected, "ball at {c:?} r {r} margin {margin}");
+            hits += expected as usize;
+            total += 1;
+        }
+        assert!(hits > 1000 && total - hits > 1000, "{hits} hits of {total}");
+    }
+}

@@ -82,6 +82,14 @@ pub trait Obstacles: Send + Sync {
         self.first_hit(shape, pose).is_some()
     }
 
+    /// Does a ball of `radius` at `center` touch anything (within the margin)? The broad phase
+    /// of every state check asks this many times; implementations may answer it faster than
+    /// [`Obstacles::intersects`] with a [`Ball`](parry3d::shape::Ball), and must give the same
+    /// answer.
+    fn ball_hits(&self, center: Vector, radius: Real) -> bool {
+        self.intersects(&parry3d::shape::Ball::new(radius), &Pose::from_translation(center))
+    }
+
     /// The smallest distance from `shape` at `pose` to any obstacle, and which obstacle, if it
     /// is at most `max_dist` (0 when touching or penetrating). `None` when nothing lies within
     /// `max_dist`.

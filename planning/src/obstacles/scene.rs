@@ -43,6 +43,8 @@ use super::{Obstacle, ObstacleId, Obstacles};
 #[derive(Clone, Debug, Default)]
 pub struct ParryScene {
     obstacles: Vec<Obstacle>,
+    /// Closed-form ball tests per obstacle, for [`Obstacles::ball_hits`].
+    quick: Vec<Quick>,
     bvh: Bvh,
     bounds: Option<Aabb>,
     margin: Real,
@@ -54,7 +56,9 @@ impl ParryScene {
         let aabbs: Vec<Aabb> = obstacles.iter().map(Obstacle::aabb).collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
         let bounds = aabbs.iter().copied().reduce(|a, b| a.merged(&b));
+        let quick = obstacles.iter().map(Quick::of).collect();
         Self {
+            quick,
             obstacles,
             bvh,
             bounds,
@@ -132,6 +136,98 @@ impl FromIterator<Obstacle> for ParryScene {
     }
 }
 
+/// A ball test in closed form: the obstacle's shape in its own frame.
+#[derive(Clone, Debug)]
+enum Quick {
+    Cuboid {
+        pose: Pose,
+        half: Vector,
+    },
+    Ball {
+        center: Vector,
+        radius: Real,
+    },
+    /// Parry's cylinder: axis y, `±half_height`.
+    Cylinder {
+        pose: Pose,
+        half_height: Real,
+        radius: Real,
+    },
+    Capsule {
+        a: Vector,
+        b: Vector,
+        radius: Real,
+    },
+    /// Anything else goes through parry.
+    Other,
+}
+
+impl Quick {
+    fn of(o: &Obstacle) -> Self {
+        let s = &*o.shape;
+        if let Some(c) = s.as_cuboid() {
+            Quick::Cuboid {
+                pose: o.pose,
+                half: c.half_extents,
+            }
+        } else if let Some(b) = s.as_ball() {
+            Quick::Ball {
+                center: o.pose.translation,
+                radius: b.radius,
+            }
+        } else if let Some(c) = s.as_cylinder() {
+            Quick::Cylinder {
+                pose: o.pose,
+                half_height: c.half_height,
+                radius: c.radius,
+            }
+        } else if let Some(c) = s.as_capsule() {
+            Quick::Capsule {
+                a: o.pose.transform_point(c.segment.a),
+                b: o.pose.transform_point(c.segment.b),
+                radius: c.radius,
+            }
+        } else {
+            Quick::Other
+        }
+    }
+
+    /// `Some(touches)` for a ball of `radius` at `center`, `None` when parry must decide.
+    #[inline]
+    fn ball(&self, center: Vector, radius: Real) -> Option<bool> {
+        Some(match self {
+            Quick::Cuboid { pose, half } => {
+                let p = pose.inverse_transform_point(center);
+                let d = (p.abs() - *half).max(Vector::ZERO);
+                d.length_squared() <= radius * radius
+            }
+            Quick::Ball { center: c, radius: r } => (center - *c).length_squared() <= (radius + r) * (radius + r),
+            Quick::Cylinder {
+                pose,
+                half_height,
+                radius: r,
+            } => {
+                let p = pose.inverse_transform_point(center);
+                let radial = (p.x * p.x + p.z * p.z).sqrt();
+                let dr = (radial - r).max(0.0);
+                let dy = (p.y.abs() - half_height).max(0.0);
+                dr * dr + dy * dy <= radius * radius
+            }
+            Quick::Capsule { a, b, radius: r } => {
+                let ab = *b - *a;
+                let len2 = ab.length_squared();
+                let t = if len2 > 0.0 {
+                    ((center - *a).dot(ab) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (center - (*a + ab * t)).length_squared() <= (radius + r) * (radius + r)
+            }
+            Quick::Other => return None,
+        })
+    }
+}
+
 /// Euclidean gap between two boxes (0 when they overlap): a lower bound on the distance between
 /// anything inside them.
 #[inline]
@@ -149,6 +245,30 @@ impl Obstacles for ParryScene {
             .intersect_aabb(&query_box)
             .find(|&i| self.touches(i, shape, pose))
             .map(ObstacleId)
+    }
+
+    fn ball_hits(&self, center: Vector, radius: Real) -> bool {
+        let r = radius + self.margin;
+        if !(center.is_finite() && r.is_finite()) {
+            return true;
+        }
+        if self.quick.len() <= 32 {
+            return self.quick.iter().enumerate().any(|(i, q)| {
+                q.ball(center, r).unwrap_or_else(|| {
+                    self.touches(
+                        i as u32,
+                        &parry3d::shape::Ball::new(radius),
+                        &Pose::from_translation(center),
+                    )
+                })
+            });
+        }
+        let query_box = Aabb::new(center - Vector::splat(r), center + Vector::splat(r));
+        self.bvh.intersect_aabb(&query_box).any(|i| {
+            self.quick[i as usize]
+                .ball(center, r)
+                .unwrap_or_else(|| self.touches(i, &parry3d::shape::Ball::new(radius), &Pose::from_translation(center)))
+        })
     }
 
     fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
