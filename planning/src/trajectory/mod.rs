@@ -128,35 +128,25 @@ pub struct Trajectory {
 fn unwrapped<S: Space>(space: &S, path: &Path) -> Result<Vec<Vec<f64>>, TrajectoryError> {
     let dim = space.dim();
     let first = path.states.first().ok_or(TrajectoryError::EmptyPath)?;
+    for (index, q) in path.states.iter().enumerate() {
+        if q.len() != dim {
+            return Err(TrajectoryError::Dimension {
+                what: "path state",
+                expected: dim,
+                got: q.len(),
+            });
+        }
+        if q.iter().any(|x| !x.is_finite()) {
+            return Err(TrajectoryError::NonFinite { index });
+        }
+    }
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
     let mut delta = vec![0.0; dim];
     out.push(first.clone());
-    for (index, pair) in path.states.windows(2).enumerate() {
-        for (i, q) in pair.iter().enumerate() {
-            if q.len() != dim {
-                return Err(TrajectoryError::Dimension {
-                    what: "path state",
-                    expected: dim,
-                    got: q.len(),
-                });
-            }
-            if q.iter().any(|x| !x.is_finite()) {
-                return Err(TrajectoryError::NonFinite { index: index + i });
-            }
-        }
+    for pair in path.states.windows(2) {
         space.difference(&pair[0], &pair[1], &mut delta);
         let prev = out.last().cloned().unwrap_or_default();
         out.push(prev.iter().zip(&delta).map(|(p, d)| p + d).collect());
-    }
-    if first.len() != dim {
-        return Err(TrajectoryError::Dimension {
-            what: "path state",
-            expected: dim,
-            got: first.len(),
-        });
-    }
-    if first.iter().any(|x| !x.is_finite()) {
-        return Err(TrajectoryError::NonFinite { index: 0 });
     }
     Ok(out)
 }
