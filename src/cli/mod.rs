@@ -4,6 +4,7 @@ mod bench;
 mod bench_plan;
 mod demo;
 mod kin;
+mod scene;
 
 use clap::{Parser, Subcommand};
 
@@ -25,6 +26,9 @@ enum Command {
     /// Measure speed.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Scenes: generate homes, summarise scene files, export them as URDF.
+    #[command(subcommand)]
+    Scene(scene::SceneCommand),
 }
 
 /// Runs one parsed command.
@@ -33,6 +37,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::Kin(c) => kin::run(c),
         Command::Bench(c) => bench::run(c),
+        Command::Scene(c) => scene::run(c),
     }
 }
 
