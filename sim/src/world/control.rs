@@ -1,0 +1,670 @@
+//! Controllers: joint position (PD through rapier's multibody motors), velocity and effort;
+//! mimic joints follow their leader through rapier DoF couplings; differential-drive and
+//! holonomic bases; a parallel gripper.
+
+use std::sync::Arc;
+
+use hearth_kinematics::RobotModel;
+use rapier3d::prelude::*;
+
+use super::error::{WorldError, WorldResult, check_finite, check_len, check_range};
+use super::physics::World;
+use super::spawn::{BaseMode, ModelEntry, ModelHandle};
+
+/// What drives one joint.
+///
+/// ```
+/// use hearth_sim::world::JointCommand;
+/// assert_eq!(JointCommand::Position { target: 0.5 }.target(), Some(0.5));
+/// assert_eq!(JointCommand::Off.target(), None);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum JointCommand {
+    /// No actuation: the joint moves freely (with its URDF damping and friction).
+    #[default]
+    Off,
+    /// PD control towards a position (rad or m).
+    Position {
+        /// Target position.
+        target: f64,
+    },
+    /// Velocity control (rad/s or m/s).
+    Velocity {
+        /// Target velocity.
+        target: f64,
+    },
+    /// A constant effort (N·m or N).
+    Effort {
+        /// Applied effort.
+        value: f64,
+    },
+}
+
+impl JointCommand {
+    /// The commanded value, if any.
+    pub fn target(self) -> Option<f64> {
+        match self {
+            JointCommand::Off => None,
+            JointCommand::Position { target } | JointCommand::Velocity { target } => Some(target),
+            JointCommand::Effort { value } => Some(value),
+        }
+    }
+}
+
+/// Gains of one joint's controllers (force-based: N·m/rad, N·m·s/rad, or N/m, N·s/m).
+///
+/// Defaults from the joint's effort limit and effective inertia: the position controller
+/// reaches its effort limit at 5 mrad (or 5 mm) of error and is critically damped.
+///
+/// ```
+/// use hearth_sim::world::JointGains;
+/// let g = JointGains { stiffness: 100.0, damping: 20.0, velocity_gain: 10.0, max_effort: 5.0 };
+/// assert!(g.validate("j").is_ok());
+/// assert!(JointGains { stiffness: f64::NAN, ..g }.validate("j").is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointGains {
+    /// Position stiffness (proportional gain).
+    pub stiffness: f64,
+    /// Position damping (derivative gain).
+    pub damping: f64,
+    /// Velocity-controller gain (effort per unit of velocity error).
+    pub velocity_gain: f64,
+    /// Largest effort the motor applies (`+∞` for none).
+    pub max_effort: f64,
+}
+
+impl JointGains {
+    /// Checks that every gain is finite and non-negative (`max_effort` may be `+∞`) and that
+    /// `max_effort` is positive.
+    ///
+    /// # Errors
+    /// [`WorldError::NonFinite`] or [`WorldError::OutOfRange`] naming the joint.
+    pub fn validate(&self, joint: &str) -> WorldResult<()> {
+        check_range("stiffness", joint, self.stiffness, 0.0, f64::MAX)?;
+        check_range("damping", joint, self.damping, 0.0, f64::MAX)?;
+        check_range("velocity gain", joint, self.velocity_gain, 0.0, f64::MAX)?;
+        if self.max_effort.is_nan() || self.max_effort <= 0.0 {
+            return Err(WorldError::OutOfRange {
+                what: "max effort",
+                name: joint.to_owned(),
+                value: self.max_effort,
+                lower: f64::MIN_POSITIVE,
+                upper: f64::INFINITY,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Default gains for a joint with effective inertia `m_eff` and effort limit `effort`.
+pub(crate) fn default_gains(m_eff: f64, effort: f64) -> JointGains {
+    let (stiffness, velocity_gain) = if effort.is_finite() {
+        (effort / 0.005, effort / 0.05)
+    } else {
+        (m_eff * 4.0e3, (m_eff * 200.0).max(10.0))
+    };
+    JointGains {
+        stiffness,
+        damping: 2.0 * (stiffness * m_eff).sqrt(),
+        velocity_gain,
+        max_effort: effort,
+    }
+}
+
+/// A differential-drive base: two wheel joints, wheel radius and axle width.
+///
+/// ```
+/// use hearth_sim::kinematics::RobotModel;
+/// use hearth_sim::world::DiffDriveConfig;
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// let d = DiffDriveConfig::for_builtin("fetch").unwrap();
+/// assert_eq!(d.left_joint, "l_wheel_joint");
+/// assert!(d.wheel_radius > 0.05 && d.axle_width > 0.3);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffDriveConfig {
+    /// Left wheel joint.
+    pub left_joint: String,
+    /// Right wheel joint.
+    pub right_joint: String,
+    /// Wheel radius in m.
+    pub wheel_radius: f64,
+    /// Distance between the wheel contact points in m.
+    pub axle_width: f64,
+}
+
+impl DiffDriveConfig {
+    /// The parameters of a built-in robot (`fetch`, `locobot`, `turtlebot`).
+    pub fn for_builtin(robot: &str) -> Option<Self> {
+        let (l, r, radius, width) = match robot {
+            "fetch" => ("l_wheel_joint", "r_wheel_joint", 0.06433, 0.37476),
+            "locobot" | "turtlebot" => ("wheel_left_joint", "wheel_right_joint", 0.0392, 0.23),
+            _ => return None,
+        };
+        Some(Self {
+            left_joint: l.to_owned(),
+            right_joint: r.to_owned(),
+            wheel_radius: radius,
+            axle_width: width,
+        })
+    }
+
+    pub(crate) fn builtin(model: &RobotModel) -> Option<DiffDrive> {
+        Self::for_builtin(model.name())?.validate(model, model.name()).ok()
+    }
+
+    /// Resolves the joints against `model`.
+    pub(crate) fn validate(self, model: &RobotModel, name: &str) -> WorldResult<DiffDrive> {
+        check_range("wheel radius", name, self.wheel_radius, 1e-4, 10.0)?;
+        check_range("axle width", name, self.axle_width, 1e-4, 100.0)?;
+        let mut poses = model.pose_buffer();
+        let _ = model.fk(&model.neutral_configuration(), &mut poses);
+        let resolve = |joint: &str| -> WorldResult<(usize, f64)> {
+            let j = model.joint_index(joint).map_err(|_| WorldError::UnknownJoint {
+                model: name.to_owned(),
+                joint: joint.to_owned(),
+            })?;
+            let jt = &model.joints()[j];
+            let v = jt.variable.ok_or_else(|| WorldError::JointNotCommandable {
+                model: name.to_owned(),
+                joint: joint.to_owned(),
+                reason: "a wheel must be an independent movable joint",
+            })?;
+            // Positive wheel speed must roll the base forward (+x): the axis must point left.
+            let axis_in_root = poses[model.root()].rotation.inverse() * poses[jt.child].rotation * jt.axis.into_inner();
+            Ok((v, if axis_in_root.y >= 0.0 { 1.0 } else { -1.0 }))
+        };
+        let (left, left_sign) = resolve(&self.left_joint)?;
+        let (right, right_sign) = resolve(&self.right_joint)?;
+        Ok(DiffDrive {
+            config: self,
+            left,
+            right,
+            left_sign,
+            right_sign,
+        })
+    }
+}
+
+/// A differential drive resolved against its model.
+#[derive(Clone, Debug)]
+pub(crate) struct DiffDrive {
+    pub(crate) config: DiffDriveConfig,
+    pub(crate) left: usize,
+    pub(crate) right: usize,
+    pub(crate) left_sign: f64,
+    pub(crate) right_sign: f64,
+}
+
+/// The latest base command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum BaseDrive {
+    Holonomic { vx: f64, vy: f64, omega: f64 },
+}
+
+/// A parallel gripper: finger joints with their open and closed positions.
+///
+/// ```
+/// let g = hearth_sim::world::GripperConfig::for_builtin("panda").unwrap();
+/// assert_eq!(g.joints, ["panda_finger_joint1"]);
+/// assert_eq!(g.open, [0.04]);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct GripperConfig {
+    /// Finger joints (leaders only; mimic joints follow).
+    pub joints: Vec<String>,
+    /// Open position per joint.
+    pub open: Vec<f64>,
+    /// Closed position per joint.
+    pub closed: Vec<f64>,
+}
+
+impl GripperConfig {
+    /// The gripper of a built-in robot (`panda`, `fetch`, `locobot`).
+    pub fn for_builtin(robot: &str) -> Option<Self> {
+        let (joints, open, closed): (&[&str], &[f64], &[f64]) = match robot {
+            "panda" => (&["panda_finger_joint1"], &[0.04], &[0.0]),
+            "fetch" => (&["r_gripper_finger_joint"], &[0.05], &[0.0]),
+            "locobot" => (&["joint_6", "joint_7"], &[-0.025, 0.025], &[0.0, 0.0]),
+            _ => return None,
+        };
+        Some(Self {
+            joints: joints.iter().map(|s| (*s).to_owned()).collect(),
+            open: open.to_vec(),
+            closed: closed.to_vec(),
+        })
+    }
+
+    pub(crate) fn builtin(model: &RobotModel) -> Option<Gripper> {
+        Self::for_builtin(model.name())?.validate(model, model.name()).ok()
+    }
+
+    pub(crate) fn validate(self, model: &RobotModel, name: &str) -> WorldResult<Gripper> {
+        check_len("gripper open positions", self.joints.len(), self.open.len())?;
+        check_len("gripper closed positions", self.joints.len(), self.closed.len())?;
+        let mut vars = Vec::with_capacity(self.joints.len());
+        for (i, joint) in self.joints.iter().enumerate() {
+            let j = model.joint_index(joint).map_err(|_| WorldError::UnknownJoint {
+                model: name.to_owned(),
+                joint: joint.clone(),
+            })?;
+            let v = model.joints()[j]
+                .variable
+                .ok_or_else(|| WorldError::JointNotCommandable {
+                    model: name.to_owned(),
+                    joint: joint.clone(),
+                    reason: "a finger must be an independent movable joint",
+                })?;
+            let (lo, hi) = (model.lower()[v], model.upper()[v]);
+            check_range("gripper open position", joint, self.open[i], lo, hi)?;
+            check_range("gripper closed position", joint, self.closed[i], lo, hi)?;
+            vars.push(v);
+        }
+        Ok(Gripper { config: self, vars })
+    }
+}
+
+/// A gripper resolved against its model.
+#[derive(Clone, Debug)]
+pub(crate) struct Gripper {
+    pub(crate) config: GripperConfig,
+    pub(crate) vars: Vec<usize>,
+}
+
+impl World {
+    /// Position targets for every joint (`q` order), held by PD motors.
+    ///
+    /// # Errors
+    /// Unknown model; wrong length; NaN or out-of-limit targets. Nothing changes on error.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig, WorldError};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let mut q = panda.neutral_configuration();
+    /// q[0] = 0.3;
+    /// world.set_position_targets(arm, &q)?;
+    /// for _ in 0..30 { world.step(); }
+    /// assert!((world.joint_positions(arm)?[0] - 0.3).abs() < 1e-2);
+    /// q[0] = f64::NAN;
+    /// assert!(matches!(world.set_position_targets(arm, &q), Err(WorldError::NonFinite { .. })));
+    /// # Ok::<(), WorldError>(())
+    /// ```
+    pub fn set_position_targets(&mut self, handle: ModelHandle, q: &[f64]) -> WorldResult<()> {
+        self.set_all(handle, "position targets", q, check_position, |target| {
+            JointCommand::Position { target }
+        })
+    }
+
+    /// Velocity targets for every joint (`q` order).
+    ///
+    /// # Errors
+    /// Unknown model; wrong length; NaN or beyond the velocity limit.
+    pub fn set_velocity_targets(&mut self, handle: ModelHandle, v: &[f64]) -> WorldResult<()> {
+        self.set_all(handle, "velocity targets", v, check_velocity, |target| {
+            JointCommand::Velocity { target }
+        })
+    }
+
+    /// Efforts for every joint (`q` order), applied every physics step until changed.
+    ///
+    /// # Errors
+    /// Unknown model; wrong length; NaN or beyond the effort limit.
+    pub fn set_efforts(&mut self, handle: ModelHandle, tau: &[f64]) -> WorldResult<()> {
+        self.set_all(handle, "efforts", tau, check_effort, |value| JointCommand::Effort {
+            value,
+        })
+    }
+
+    /// Validates every value, then installs one command per joint.
+    fn set_all(
+        &mut self,
+        handle: ModelHandle,
+        what: &'static str,
+        values: &[f64],
+        check: fn(&ModelEntry, usize, f64) -> WorldResult<()>,
+        make: fn(f64) -> JointCommand,
+    ) -> WorldResult<()> {
+        let entry = self.entry(handle)?;
+        check_len(what, entry.model.dof(), values.len())?;
+        for (v, &x) in values.iter().enumerate() {
+            check(entry, v, x)?;
+        }
+        let entry = &mut self.state.models[handle.index()];
+        for (slot, &x) in entry.commands.iter_mut().zip(values) {
+            *slot = make(x);
+        }
+        for v in 0..values.len() {
+            self.write_motor(handle, v);
+        }
+        self.refresh_effort_flag(handle);
+        Ok(())
+    }
+
+    /// Sets the command of one joint by name.
+    ///
+    /// # Errors
+    /// Unknown model or joint; a fixed or mimic joint; NaN or out-of-range value.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{JointCommand, SpawnOptions, World, WorldConfig, WorldError};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.set_joint_command(arm, "panda_joint1", JointCommand::Velocity { target: 0.2 })?;
+    /// let err = world.set_joint_command(arm, "elbow", JointCommand::Off).unwrap_err();
+    /// assert!(matches!(err, WorldError::UnknownJoint { .. }));
+    /// # Ok::<(), WorldError>(())
+    /// ```
+    pub fn set_joint_command(&mut self, handle: ModelHandle, joint: &str, command: JointCommand) -> WorldResult<()> {
+        let entry = self.entry(handle)?;
+        let v = entry.variable_by_name(joint)?;
+        match command {
+            JointCommand::Off => {}
+            JointCommand::Position { target } => check_position(entry, v, target)?,
+            JointCommand::Velocity { target } => check_velocity(entry, v, target)?,
+            JointCommand::Effort { value } => check_effort(entry, v, value)?,
+        }
+        self.state.models[handle.index()].commands[v] = command;
+        self.write_motor(handle, v);
+        self.refresh_effort_flag(handle);
+        Ok(())
+    }
+
+    /// The active command of every joint (`q` order).
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownModel`].
+    pub fn joint_commands(&self, handle: ModelHandle) -> WorldResult<&[JointCommand]> {
+        Ok(&self.entry(handle)?.commands)
+    }
+
+    /// The gains of every joint (`q` order).
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownModel`].
+    pub fn joint_gains(&self, handle: ModelHandle) -> WorldResult<&[JointGains]> {
+        Ok(&self.entry(handle)?.gains)
+    }
+
+    /// Replaces the gains of one joint.
+    ///
+    /// # Errors
+    /// Unknown model or joint; invalid gains.
+    pub fn set_joint_gains(&mut self, handle: ModelHandle, joint: &str, gains: JointGains) -> WorldResult<()> {
+        let v = self.entry(handle)?.variable_by_name(joint)?;
+        gains.validate(joint)?;
+        self.state.models[handle.index()].gains[v] = gains;
+        self.write_motor(handle, v);
+        Ok(())
+    }
+
+    /// Drives a differential-drive base at forward speed `v` (m/s) and yaw rate `omega`
+    /// (rad/s) through left/right wheel velocity targets `(v ∓ ω·w/2) / r`.
+    ///
+    /// # Errors
+    /// [`WorldError::NoController`] without wheels; NaN; wheel speeds beyond their limit.
+    pub fn drive(&mut self, handle: ModelHandle, v: f64, omega: f64) -> WorldResult<()> {
+        let entry = self.entry(handle)?;
+        check_finite("base speed", "v", v)?;
+        check_finite("base yaw rate", "omega", omega)?;
+        let dd = entry.diff_drive.as_ref().ok_or_else(|| WorldError::NoController {
+            model: entry.name.clone(),
+            controller: "differential-drive base",
+        })?;
+        let c = &dd.config;
+        let left = dd.left_sign * (v - omega * c.axle_width / 2.0) / c.wheel_radius;
+        let right = dd.right_sign * (v + omega * c.axle_width / 2.0) / c.wheel_radius;
+        check_velocity(entry, dd.left, left)?;
+        check_velocity(entry, dd.right, right)?;
+        let (l, r) = (dd.left, dd.right);
+        let entry = &mut self.state.models[handle.index()];
+        entry.commands[l] = JointCommand::Velocity { target: left };
+        entry.commands[r] = JointCommand::Velocity { target: right };
+        self.write_motor(handle, l);
+        self.write_motor(handle, r);
+        self.refresh_effort_flag(handle);
+        Ok(())
+    }
+
+    /// Drives a holonomic base (spawned with [`BaseMode::Holonomic`]) at `(vx, vy)` m/s in
+    /// its own frame and yaw rate `omega` rad/s.
+    ///
+    /// # Errors
+    /// [`WorldError::NoController`] for other bases; NaN values.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{BaseMode, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let bot = RobotModel::builtin("turtlebot").unwrap();
+    /// let opts = SpawnOptions { base: BaseMode::Holonomic, ..SpawnOptions::default() };
+    /// let h = world.spawn_model(&bot, &nalgebra::Isometry3::translation(0.0, 0.0, 0.01), opts)?;
+    /// world.drive_holonomic(h, 0.0, 0.5, 0.0)?;
+    /// for _ in 0..30 { world.step(); }
+    /// assert!((world.base_pose(h)?.translation.y - 0.5).abs() < 0.02);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn drive_holonomic(&mut self, handle: ModelHandle, vx: f64, vy: f64, omega: f64) -> WorldResult<()> {
+        let entry = self.entry(handle)?;
+        check_finite("base speed", "vx", vx)?;
+        check_finite("base speed", "vy", vy)?;
+        check_finite("base yaw rate", "omega", omega)?;
+        if entry.base != BaseMode::Holonomic {
+            return Err(WorldError::NoController {
+                model: entry.name.clone(),
+                controller: "holonomic base (spawn with BaseMode::Holonomic)",
+            });
+        }
+        let root = entry.root;
+        self.state.models[handle.index()].drive = Some(BaseDrive::Holonomic { vx, vy, omega });
+        self.wake(root);
+        if let Some(bodies) = self.state.models.get(handle.index()).map(|e| e.bodies.clone()) {
+            for h in bodies {
+                self.wake(h);
+            }
+        }
+        Ok(())
+    }
+
+    /// Opens the gripper (position targets at the open positions, full effort).
+    ///
+    /// # Errors
+    /// [`WorldError::NoController`] without a gripper.
+    pub fn gripper_open(&mut self, handle: ModelHandle) -> WorldResult<()> {
+        let effort = f64::INFINITY;
+        self.gripper_command(handle, true, effort)
+    }
+
+    /// Closes the gripper, squeezing with at most `force` (N) per finger joint.
+    ///
+    /// # Errors
+    /// [`WorldError::NoController`] without a gripper; a force that is NaN, not positive or
+    /// beyond the finger's effort limit.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.gripper_open(arm)?;
+    /// for _ in 0..15 { world.step(); }
+    /// assert!(world.joint_positions(arm)?[7] > 0.035);
+    /// world.gripper_close(arm, 10.0)?;
+    /// for _ in 0..15 { world.step(); }
+    /// assert!(world.joint_positions(arm)?[7] < 0.005);
+    /// assert!(world.gripper_close(arm, -1.0).is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn gripper_close(&mut self, handle: ModelHandle, force: f64) -> WorldResult<()> {
+        self.gripper_command(handle, false, force)
+    }
+
+    fn gripper_command(&mut self, handle: ModelHandle, open: bool, force: f64) -> WorldResult<()> {
+        let entry = self.entry(handle)?;
+        let gripper = entry.gripper.as_ref().ok_or_else(|| WorldError::NoController {
+            model: entry.name.clone(),
+            controller: "gripper",
+        })?;
+        for &v in &gripper.vars {
+            let limit = entry.model.effort_limits()[v];
+            if !open {
+                check_range(
+                    "gripper force",
+                    &entry.model.variable_names()[v],
+                    force,
+                    f64::MIN_POSITIVE,
+                    limit,
+                )?;
+            }
+        }
+        let gripper = gripper.clone();
+        let entry = &mut self.state.models[handle.index()];
+        for (i, &v) in gripper.vars.iter().enumerate() {
+            let limit = entry.model.effort_limits()[v];
+            let target = if open {
+                gripper.config.open[i]
+            } else {
+                gripper.config.closed[i]
+            };
+            entry.commands[v] = JointCommand::Position { target };
+            entry.gains[v].max_effort = force.min(limit);
+        }
+        for &v in &gripper.vars {
+            self.write_motor(handle, v);
+        }
+        self.refresh_effort_flag(handle);
+        Ok(())
+    }
+
+    pub(crate) fn refresh_effort_flag(&mut self, handle: ModelHandle) {
+        let entry = &mut self.state.models[handle.index()];
+        let had = entry.has_effort;
+        entry.has_effort = entry.commands.iter().any(|c| matches!(c, JointCommand::Effort { .. }));
+        if had && !entry.has_effort {
+            let bodies = entry.bodies.clone();
+            for h in bodies {
+                if let Some(rb) = Arc::make_mut(&mut self.state.bodies).get_mut(h) {
+                    rb.reset_forces(true);
+                    rb.reset_torques(true);
+                }
+            }
+        }
+    }
+
+    /// Writes the motor of variable `v` from its command and gains.
+    pub(crate) fn write_motor(&mut self, handle: ModelHandle, v: usize) {
+        let entry = &self.state.models[handle.index()];
+        let Some(slot) = entry.slot(v) else { return };
+        let command = entry.commands[v];
+        let g = entry.gains[v];
+        let max = if g.max_effort.is_finite() {
+            g.max_effort as Real
+        } else {
+            Real::MAX
+        };
+        let Some(mb) = self.multibody_of_mut(handle) else {
+            return;
+        };
+        let Some(link) = mb.link_mut(slot.link_id) else { return };
+        let axis = slot.joint_axis();
+        let data = &mut link.joint.data;
+        match command {
+            JointCommand::Position { target } => {
+                data.set_motor(axis, target as Real, 0.0, g.stiffness as Real, g.damping as Real);
+            }
+            JointCommand::Velocity { target } => {
+                data.set_motor(axis, 0.0, target as Real, 0.0, g.velocity_gain as Real);
+            }
+            JointCommand::Effort { .. } | JointCommand::Off => {
+                data.motor_axes.remove(axis.into());
+                self.wake(slot.body);
+                return;
+            }
+        }
+        data.set_motor_max_force(axis, max);
+        data.set_motor_model(axis, MotorModel::ForceBased);
+        self.wake(slot.body);
+    }
+
+    /// Per physics step: effort joints and holonomic bases.
+    pub(crate) fn apply_controllers(&mut self) {
+        let s = &mut self.state;
+        for entry in &s.models {
+            if entry.has_effort {
+                apply_efforts(entry, Arc::make_mut(&mut s.bodies));
+            }
+            if let Some(BaseDrive::Holonomic { vx, vy, omega }) = entry.drive
+                && let Some(rb) = Arc::make_mut(&mut s.bodies).get_mut(entry.root)
+            {
+                // The multibody takes its root pose from the body at the start of each step,
+                // so the kinematic root is advanced here; its velocity is set too so that
+                // contacts see the motion.
+                let dt = self.params.dt;
+                let pose = *rb.position();
+                let world_v = pose.rotation * Vector::new(vx as Real, vy as Real, 0.0);
+                let turn = Rotation::from_rotation_z(omega as Real * dt);
+                let next = Pose::from_parts(pose.translation + world_v * dt, (turn * pose.rotation).normalize());
+                rb.set_position(next, true);
+                rb.set_linvel(world_v, true);
+                rb.set_angvel(Vector::new(0.0, 0.0, omega as Real), true);
+            }
+        }
+    }
+}
+
+/// Applies the model's joint efforts as equal and opposite body forces/torques.
+fn apply_efforts(entry: &ModelEntry, bodies: &mut RigidBodySet) {
+    for &h in &entry.bodies {
+        if let Some(rb) = bodies.get_mut(h) {
+            rb.reset_forces(false);
+            rb.reset_torques(false);
+        }
+    }
+    for (v, command) in entry.commands.iter().enumerate() {
+        let (JointCommand::Effort { value }, Some(slot)) = (command, entry.slot(v)) else {
+            continue;
+        };
+        let Some(child) = bodies.get(slot.body) else { continue };
+        let axis = *child.rotation() * slot.local_axis;
+        let point = child.center_of_mass();
+        let value = *value as Real;
+        if slot.axis == 0 {
+            if let Some(rb) = bodies.get_mut(slot.body) {
+                rb.add_force(axis * value, true);
+            }
+            if let Some(rb) = bodies.get_mut(slot.parent_body) {
+                rb.add_force_at_point(-axis * value, point, true);
+            }
+        } else {
+            if let Some(rb) = bodies.get_mut(slot.body) {
+                rb.add_torque(axis * value, true);
+            }
+            if let Some(rb) = bodies.get_mut(slot.parent_body) {
+                rb.add_torque(-axis * value, true);
+            }
+        }
+    }
+}
+
+fn check_position(entry: &ModelEntry, v: usize, x: f64) -> WorldResult<()> {
+    let m = &entry.model;
+    check_range("position target", &m.variable_names()[v], x, m.lower()[v], m.upper()[v])
+}
+
+fn check_velocity(entry: &ModelEntry, v: usize, x: f64) -> WorldResult<()> {
+    let m = &entry.model;
+    let limit = m.velocity_limits()[v];
+    check_range("velocity target", &m.variable_names()[v], x, -limit, limit)
+}
+
+fn check_effort(entry: &ModelEntry, v: usize, x: f64) -> WorldResult<()> {
+    let m = &entry.model;
+    let limit = m.effort_limits()[v];
+    check_range("effort", &m.variable_names()[v], x, -limit, limit)
+}

@@ -1,0 +1,236 @@
+//! [`WorldObstacles`]: the live world as planning's [`Obstacles`], queried through rapier's
+//! own query pipeline (its broad-phase BVH and collider set), without copying.
+
+use std::sync::Arc;
+
+use hearth_planning::obstacles::{ObstacleId, Obstacles};
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::math::{Pose, Real, Vector};
+use parry3d::partitioning::{BvhNode, TraversalAction};
+use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher, Ray};
+use parry3d::shape::Shape;
+use rapier3d::prelude::{
+    BroadPhaseBvh, Collider, ColliderHandle, ColliderSet, QueryFilter, QueryPipeline, RigidBodyHandle, RigidBodySet,
+};
+
+use super::error::WorldResult;
+use super::physics::{BodyId, World};
+use super::spawn::ModelHandle;
+
+/// A read-only view of the world's colliders for planners, excluding some bodies (the
+/// planning robot's own links, whatever its gripper holds).
+///
+/// [`ObstacleId`]s are rapier collider indices; [`Obstacles::name`] gives the body name
+/// (`ground`, `MODEL/LINK`, …).
+///
+/// The view shares the world's collider set, body set and broad-phase BVH (reference-counted,
+/// no copy), so it is `'static + Send + Sync` and fits `Arc<dyn Obstacles>` for planner
+/// threads. It answers for the state at the moment it was taken: if the world steps while a
+/// view is alive, the world copies those sets before changing them (copy on write) and the
+/// view keeps its consistent picture; take a new view to see the new state.
+///
+/// **Margin.** With [`WorldObstacles::with_margin`]`(m)`, `intersects` / `first_hit` report a
+/// hit when the exact distance is `≤ m`; `distance` and `cast_ray` are exact.
+///
+/// ```
+/// use hearth_sim::world::{World, WorldConfig};
+/// use hearth_sim::planning::obstacles::Obstacles;
+/// use nalgebra::Isometry3;
+/// use parry3d::math::Pose;
+/// use parry3d::shape::Ball;
+///
+/// let mut world = World::new(WorldConfig { ground_plane: false, ..WorldConfig::default() })?;
+/// world.add_box("table", [0.5, 0.5, 0.05], &Isometry3::translation(1.0, 0.0, 0.5), false)?;
+/// let view = world.obstacles_view(&[])?;
+/// let probe = Ball::new(0.05);
+/// assert!(view.intersects(&probe, &Pose::translation(1.0, 0.0, 0.58)));
+/// assert!(!view.intersects(&probe, &Pose::translation(1.0, 0.0, 0.7)));
+/// let (d, id) = view.distance(&probe, &Pose::translation(1.0, 0.0, 0.7), 1.0).unwrap();
+/// assert!((d - 0.1).abs() < 1e-4);
+/// assert_eq!(view.name(id), Some("table"));
+/// # Ok::<(), hearth_sim::world::WorldError>(())
+/// ```
+#[derive(Clone)]
+pub struct WorldObstacles {
+    bodies: Arc<RigidBodySet>,
+    colliders: Arc<ColliderSet>,
+    broad_phase: Arc<BroadPhaseBvh>,
+    names: Arc<Vec<String>>,
+    /// Excluded bodies, sorted by raw handle parts.
+    excluded: Vec<(u32, u32)>,
+    margin: Real,
+}
+
+impl std::fmt::Debug for WorldObstacles {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WorldObstacles")
+            .field("colliders", &self.colliders.len())
+            .field("excluded_bodies", &self.excluded.len())
+            .field("margin", &self.margin)
+            .finish()
+    }
+}
+
+impl World {
+    /// A collision view of the live world that ignores the bodies of the `exclude` models.
+    ///
+    /// # Errors
+    /// [`super::WorldError::UnknownModel`] for a handle that names no model.
+    pub fn obstacles_view(&self, exclude: &[ModelHandle]) -> WorldResult<WorldObstacles> {
+        let mut excluded = Vec::new();
+        for &m in exclude {
+            excluded.extend(self.entry(m)?.bodies.iter().map(|h| h.into_raw_parts()));
+        }
+        excluded.sort_unstable();
+        excluded.dedup();
+        let s = &self.state;
+        Ok(WorldObstacles {
+            bodies: Arc::clone(&s.bodies),
+            colliders: Arc::clone(&s.colliders),
+            broad_phase: Arc::clone(&s.broad_phase),
+            names: Arc::clone(&s.names),
+            excluded,
+            margin: 0.0,
+        })
+    }
+}
+
+impl WorldObstacles {
+    /// Also ignores these bodies (e.g. the object held by the gripper).
+    pub fn excluding_bodies(mut self, bodies: &[BodyId]) -> Self {
+        self.excluded.extend(bodies.iter().map(|b| b.0.into_raw_parts()));
+        self.excluded.sort_unstable();
+        self.excluded.dedup();
+        self
+    }
+
+    /// Sets the collision margin. Negative or non-finite values count as 0.
+    pub fn with_margin(mut self, margin: Real) -> Self {
+        self.margin = if margin.is_finite() && margin > 0.0 {
+            margin
+        } else {
+            0.0
+        };
+        self
+    }
+
+    /// The collision margin applied by `intersects` / `first_hit`.
+    pub fn margin(&self) -> Real {
+        self.margin
+    }
+
+    fn is_excluded(&self, body: Option<RigidBodyHandle>) -> bool {
+        body.is_some_and(|b| self.excluded.binary_search(&b.into_raw_parts()).is_ok())
+    }
+
+    /// The dispatcher rapier's narrow phase uses by default.
+    fn dispatcher(&self) -> &'static dyn QueryDispatcher {
+        &DefaultQueryDispatcher
+    }
+
+    /// Runs `f` with rapier's query pipeline over this view (exclusions as a filter).
+    fn with_pipeline<T>(&self, f: impl FnOnce(&QueryPipeline<'_>) -> T) -> T {
+        let keep = |_: ColliderHandle, co: &Collider| !self.is_excluded(co.parent());
+        let filter = QueryFilter::default().exclude_sensors().predicate(&keep);
+        let pipeline = self
+            .broad_phase
+            .as_query_pipeline(self.dispatcher(), &self.bodies, &self.colliders, filter);
+        f(&pipeline)
+    }
+
+    /// The collider behind a BVH leaf, if it passes the exclusions.
+    fn candidate(&self, leaf: u32) -> Option<&Collider> {
+        let (co, _) = self.colliders.get_unknown_gen(leaf)?;
+        (co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent())).then_some(co)
+    }
+
+    fn touches(&self, co: &Collider, shape: &dyn Shape, pose: &Pose) -> bool {
+        let pos12 = pose.inv_mul(co.position());
+        let d = self.dispatcher();
+        if self.margin > 0.0 {
+            return d
+                .distance(&pos12, shape, co.shape())
+                .map_or(true, |dist| dist.distance <= self.margin);
+        }
+        match d.intersection_test(&pos12, shape, co.shape()) {
+            Ok(hit) => hit.intersecting,
+            Err(_) => d
+                .distance(&pos12, shape, co.shape())
+                .map_or(true, |dist| dist.distance <= 0.0),
+        }
+    }
+}
+
+/// Euclidean gap between two boxes (0 when they overlap).
+fn aabb_gap(a: &Aabb, b: &Aabb) -> Real {
+    (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO).length()
+}
+
+impl Obstacles for WorldObstacles {
+    fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
+        let query = shape.compute_aabb(pose).loosened(self.margin);
+        self.with_pipeline(|qp| {
+            qp.bvh
+                .intersect_aabb(&query)
+                .find(|&leaf| self.candidate(leaf).is_some_and(|co| self.touches(co, shape, pose)))
+                .map(ObstacleId)
+        })
+    }
+
+    fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
+        if max_dist.is_nan() || max_dist < 0.0 {
+            return None;
+        }
+        let query = shape.compute_aabb(pose);
+        let mut best = max_dist;
+        let mut best_id: Option<u32> = None;
+        self.with_pipeline(|qp| {
+            qp.bvh.traverse(|node: &BvhNode| {
+                let gap = aabb_gap(&node.aabb(), &query);
+                if gap > best || (best_id.is_some() && gap >= best) {
+                    return TraversalAction::Prune;
+                }
+                if let Some(leaf) = node.leaf_data()
+                    && let Some(co) = self.candidate(leaf)
+                {
+                    let pos12 = pose.inv_mul(co.position());
+                    let d = self
+                        .dispatcher()
+                        .distance(&pos12, shape, co.shape())
+                        .map_or(0.0, |dist| dist.distance);
+                    if d < best || (best_id.is_none() && d <= best) {
+                        best = d;
+                        best_id = Some(leaf);
+                        if d <= 0.0 {
+                            return TraversalAction::EarlyExit;
+                        }
+                    }
+                }
+                TraversalAction::Continue
+            });
+        });
+        best_id.map(|i| (best, ObstacleId(i)))
+    }
+
+    fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)> {
+        if !origin.is_finite() || !dir.is_finite() || dir == Vector::ZERO || max_toi.is_nan() || max_toi < 0.0 {
+            return None;
+        }
+        let ray = Ray::new(origin, dir);
+        self.with_pipeline(|qp| qp.cast_ray(&ray, max_toi, true))
+            .map(|(h, t)| (t, ObstacleId(h.into_raw_parts().0)))
+    }
+
+    fn aabb(&self) -> Option<Aabb> {
+        self.colliders
+            .iter()
+            .filter(|(_, co)| co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent()))
+            .map(|(_, co)| co.compute_aabb())
+            .reduce(|a, b| a.merged(&b))
+    }
+
+    fn name(&self, id: ObstacleId) -> Option<&str> {
+        let (co, _) = self.colliders.get_unknown_gen(id.0)?;
+        self.names.get(co.user_data as usize).map(String::as_str)
+    }
+}

@@ -1,0 +1,342 @@
+//! [`World`]: the rapier sets and pipeline, stepping, time, simple bodies.
+
+use std::sync::Arc;
+
+use ::nalgebra::Isometry3;
+use hearth_kinematics::{from_pose, to_pose};
+use rapier3d::prelude::*;
+
+use super::config::WorldConfig;
+use super::error::{WorldError, WorldResult, check_finite};
+use super::spawn::ModelEntry;
+
+/// A rigid body in the world (a robot link group, an object, the ground).
+///
+/// Wraps rapier's handle; [`BodyId::handle`] gives it back for direct use of
+/// [`World::bodies`].
+///
+/// ```
+/// use hearth_sim::world::{World, WorldConfig};
+/// let world = World::new(WorldConfig::default()).unwrap();
+/// let ground = world.ground().expect("the default config adds a ground");
+/// assert_eq!(world.body_name(ground), Some("ground"));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BodyId(pub(crate) RigidBodyHandle);
+
+impl BodyId {
+    /// The rapier handle.
+    pub fn handle(self) -> RigidBodyHandle {
+        self.0
+    }
+
+    /// Wraps a rapier handle.
+    pub fn from_handle(handle: RigidBodyHandle) -> Self {
+        Self(handle)
+    }
+}
+
+/// Everything that evolves with the simulation; cloned whole by snapshots.
+///
+/// The parts that collision views read are shared (`Arc`): a view keeps the picture it was
+/// taken from, and the world copies a part only when it changes it while a view or snapshot
+/// still holds it.
+#[derive(Clone)]
+pub(crate) struct State {
+    pub(crate) bodies: Arc<RigidBodySet>,
+    pub(crate) colliders: Arc<ColliderSet>,
+    pub(crate) impulse_joints: ImpulseJointSet,
+    pub(crate) multibody_joints: MultibodyJointSet,
+    pub(crate) islands: IslandManager,
+    pub(crate) broad_phase: Arc<BroadPhaseBvh>,
+    pub(crate) narrow_phase: NarrowPhase,
+    pub(crate) ccd: CCDSolver,
+    pub(crate) soft_bodies: SoftBodySet,
+    pub(crate) models: Vec<ModelEntry>,
+    /// Name of every body, indexed by the `user_data` of the body and of its colliders.
+    pub(crate) names: Arc<Vec<String>>,
+    pub(crate) ground: Option<RigidBodyHandle>,
+    pub(crate) time: f64,
+    pub(crate) physics_steps: u64,
+}
+
+/// The physics world: rapier3d sets and pipeline, z up, gravity along −z.
+///
+/// Robots and objects enter as [`hearth_kinematics::RobotModel`]s through
+/// [`World::spawn_model`]; [`World::step`] runs one control step (`substeps` physics steps);
+/// [`World::snapshot`] / [`World::restore`] roll the whole state back; [`World::obstacles_view`]
+/// lets planners query the live colliders.
+///
+/// ```
+/// use hearth_sim::world::{World, WorldConfig};
+/// use nalgebra::{Isometry3, Vector3};
+///
+/// let mut world = World::new(WorldConfig::default())?;
+/// let crate_box = world.add_box("crate", [0.1, 0.1, 0.1], &Isometry3::translation(0.0, 0.0, 0.5), true)?;
+/// for _ in 0..30 {
+///     world.step(); // 1 s
+/// }
+/// let z = world.body_pose(crate_box)?.translation.z;
+/// assert!((z - 0.1).abs() < 0.01, "the box rests on the ground: z = {z}");
+/// assert!((world.time() - 1.0).abs() < 1e-9);
+/// # Ok::<(), hearth_sim::world::WorldError>(())
+/// ```
+pub struct World {
+    pub(crate) config: WorldConfig,
+    pub(crate) params: IntegrationParameters,
+    pub(crate) gravity: Vector,
+    pub(crate) pipeline: PhysicsPipeline,
+    pub(crate) state: State,
+}
+
+impl std::fmt::Debug for World {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("World")
+            .field("time", &self.state.time)
+            .field("bodies", &self.state.bodies.len())
+            .field("models", &self.state.models.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl World {
+    /// An empty world (with a ground box when `config.ground_plane`).
+    ///
+    /// # Errors
+    /// [`WorldError::InvalidConfig`] when the configuration does not validate.
+    pub fn new(config: WorldConfig) -> WorldResult<Self> {
+        config.validate()?;
+        let params = IntegrationParameters {
+            dt: config.timestep as Real,
+            num_solver_iterations: config.solver_iterations as usize,
+            ..IntegrationParameters::default()
+        };
+        let g = config.gravity;
+        let mut world = Self {
+            params,
+            gravity: Vector::new(g[0] as Real, g[1] as Real, g[2] as Real),
+            pipeline: PhysicsPipeline::new(),
+            state: State {
+                bodies: Arc::new(RigidBodySet::new()),
+                colliders: Arc::new(ColliderSet::new()),
+                impulse_joints: ImpulseJointSet::new(),
+                multibody_joints: MultibodyJointSet::new(),
+                islands: IslandManager::new(),
+                broad_phase: Arc::new(BroadPhaseBvh::new()),
+                narrow_phase: NarrowPhase::new(),
+                ccd: CCDSolver::new(),
+                soft_bodies: SoftBodySet::default(),
+                models: Vec::new(),
+                names: Arc::new(Vec::new()),
+                ground: None,
+                time: 0.0,
+                physics_steps: 0,
+            },
+            config,
+        };
+        if world.config.ground_plane {
+            let body = RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.05));
+            let collider = ColliderBuilder::cuboid(100.0, 100.0, 0.05).friction(world.config.ground_friction as Real);
+            let handle = world.insert_body("ground", body, std::iter::once(collider));
+            world.state.ground = Some(handle);
+        }
+        Ok(world)
+    }
+
+    /// The configuration the world was built with.
+    pub fn config(&self) -> &WorldConfig {
+        &self.config
+    }
+
+    /// Simulated time in seconds.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+
+    /// Physics steps run so far.
+    pub fn physics_steps(&self) -> u64 {
+        self.state.physics_steps
+    }
+
+    /// Number of rigid bodies (ground included).
+    pub fn body_count(&self) -> usize {
+        self.state.bodies.len()
+    }
+
+    /// Number of colliders.
+    pub fn collider_count(&self) -> usize {
+        self.state.colliders.len()
+    }
+
+    /// The ground body, if the world has one.
+    pub fn ground(&self) -> Option<BodyId> {
+        self.state.ground.map(BodyId)
+    }
+
+    /// Read access to rapier's bodies (for renderers and tools).
+    pub fn bodies(&self) -> &RigidBodySet {
+        &self.state.bodies
+    }
+
+    /// Read access to rapier's colliders.
+    pub fn colliders(&self) -> &ColliderSet {
+        &self.state.colliders
+    }
+
+    /// Read access to rapier's narrow phase (contact graph).
+    pub fn narrow_phase(&self) -> &NarrowPhase {
+        &self.state.narrow_phase
+    }
+
+    /// The name given to a body (`ground`, `MODEL/LINK`, or the name passed to
+    /// [`World::add_box`]).
+    pub fn body_name(&self, body: BodyId) -> Option<&str> {
+        let rb = self.state.bodies.get(body.0)?;
+        self.state.names.get(rb.user_data as usize).map(String::as_str)
+    }
+
+    /// One control step: `config.substeps` physics steps.
+    pub fn step(&mut self) {
+        for _ in 0..self.config.substeps {
+            self.step_physics();
+        }
+    }
+
+    /// One physics step of `config.timestep` seconds (controllers are applied first).
+    pub fn step_physics(&mut self) {
+        self.apply_controllers();
+        let s = &mut self.state;
+        self.pipeline.step(
+            self.gravity,
+            &self.params,
+            &mut s.islands,
+            Arc::make_mut(&mut s.broad_phase),
+            &mut s.narrow_phase,
+            Arc::make_mut(&mut s.bodies),
+            Arc::make_mut(&mut s.colliders),
+            &mut s.impulse_joints,
+            &mut s.multibody_joints,
+            &mut s.soft_bodies,
+            &mut s.ccd,
+            &(),
+            &(),
+        );
+        s.time += self.config.timestep;
+        s.physics_steps += 1;
+    }
+
+    /// Adds a box with half extents `half` at `pose`: dynamic (density
+    /// `config.default_density`) or fixed.
+    ///
+    /// # Errors
+    /// [`WorldError::NonFinite`] / [`WorldError::OutOfRange`] for bad sizes or poses.
+    pub fn add_box(&mut self, name: &str, half: [f64; 3], pose: &Isometry3<f64>, dynamic: bool) -> WorldResult<BodyId> {
+        for (i, h) in half.iter().enumerate() {
+            super::error::check_range("box half extent", ["x", "y", "z"][i], *h, 1e-6, 1e6)?;
+        }
+        check_pose("box pose", name, pose)?;
+        let builder = if dynamic {
+            RigidBodyBuilder::dynamic()
+        } else {
+            RigidBodyBuilder::fixed()
+        }
+        .pose(to_pose(pose))
+        .can_sleep(self.config.sleeping);
+        let collider = ColliderBuilder::cuboid(half[0] as Real, half[1] as Real, half[2] as Real)
+            .density(self.config.default_density as Real);
+        let handle = self.insert_body(name, builder, std::iter::once(collider));
+        Ok(BodyId(handle))
+    }
+
+    /// World pose of a body's frame.
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownBody`].
+    pub fn body_pose(&self, body: BodyId) -> WorldResult<Isometry3<f64>> {
+        self.rigid_body(body).map(|rb| from_pose(rb.position()))
+    }
+
+    /// Moves a body to `pose` and zeroes its velocity (free bodies and fixed bodies alike;
+    /// for robot links use [`World::place`]).
+    ///
+    /// # Errors
+    /// Unknown body or a non-finite pose.
+    pub fn set_body_pose(&mut self, body: BodyId, pose: &Isometry3<f64>) -> WorldResult<()> {
+        check_pose("body pose", "body", pose)?;
+        self.rigid_body(body)?;
+        if let Some(rb) = Arc::make_mut(&mut self.state.bodies).get_mut(body.0) {
+            rb.set_position(to_pose(pose), true);
+            rb.set_linvel(Vector::ZERO, true);
+            rb.set_angvel(Vector::ZERO, true);
+        }
+        self.sync_bodies(&[body.0]);
+        Ok(())
+    }
+
+    pub(crate) fn rigid_body(&self, body: BodyId) -> WorldResult<&RigidBody> {
+        let (index, generation) = body.0.into_raw_parts();
+        self.state
+            .bodies
+            .get(body.0)
+            .ok_or(WorldError::UnknownBody { index, generation })
+    }
+
+    /// Inserts a body and its colliders, naming both through `user_data`.
+    pub(crate) fn insert_body(
+        &mut self,
+        name: &str,
+        builder: RigidBodyBuilder,
+        colliders: impl IntoIterator<Item = ColliderBuilder>,
+    ) -> RigidBodyHandle {
+        let name_index = self.state.names.len() as u128;
+        Arc::make_mut(&mut self.state.names).push(name.to_owned());
+        let s = &mut self.state;
+        let handle = Arc::make_mut(&mut s.bodies).insert(builder.user_data(name_index));
+        for collider in colliders {
+            Arc::make_mut(&mut s.colliders).insert_with_parent(
+                collider.user_data(name_index),
+                handle,
+                Arc::make_mut(&mut s.bodies),
+            );
+        }
+        self.sync_bodies(&[handle]);
+        handle
+    }
+
+    /// Brings the colliders of teleported bodies and their broad-phase boxes up to date, so
+    /// queries see the new poses before the next step.
+    pub(crate) fn sync_bodies(&mut self, handles: &[RigidBodyHandle]) {
+        let s = &mut self.state;
+        for &h in handles {
+            let Some(rb) = s.bodies.get(h) else { continue };
+            let pose = *rb.position();
+            for &ch in rb.colliders() {
+                let Some(co) = Arc::make_mut(&mut s.colliders).get_mut(ch) else {
+                    continue;
+                };
+                let local = co.position_wrt_parent().copied().unwrap_or(Pose::IDENTITY);
+                co.set_position(pose * local);
+                let aabb = co.compute_broad_phase_aabb(&self.params, &s.bodies);
+                if aabb.mins.is_finite() && aabb.maxs.is_finite() {
+                    Arc::make_mut(&mut s.broad_phase).set_aabb(&self.params, ch, aabb);
+                }
+            }
+        }
+    }
+
+    /// Wakes a body (and its island) up.
+    pub(crate) fn wake(&mut self, handle: RigidBodyHandle) {
+        let s = &mut self.state;
+        if s.bodies.contains(handle) {
+            s.islands.wake_up(Arc::make_mut(&mut s.bodies), handle, true);
+        }
+    }
+}
+
+/// Checks that a pose has finite entries.
+pub(crate) fn check_pose(what: &'static str, name: &str, pose: &Isometry3<f64>) -> WorldResult<()> {
+    for v in pose.translation.vector.iter().chain(pose.rotation.coords.iter()) {
+        check_finite(what, name, *v)?;
+    }
+    Ok(())
+}
