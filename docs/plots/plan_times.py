@@ -29,12 +29,12 @@ def load(paths):
 def main():
     out, paths = sys.argv[1], sys.argv[2:]
     data = load(paths)
-    fig, axes = plt.subplots(len(data), 1, figsize=(11, 3.6 * len(data)), squeeze=False)
+    fig, axes = plt.subplots(len(data), 1, figsize=(12, 4.4 * len(data)), squeeze=False)
     for ax, (robot, groups) in zip(axes[:, 0], sorted(data.items())):
         keys = sorted(groups)
         ax.boxplot([groups[k] for k in keys], whis=(5, 95), showfliers=True, flierprops={"markersize": 2})
         ax.set_xticks(range(1, len(keys) + 1))
-        ax.set_xticklabels([f"{f}\n{p}" for f, p in keys], fontsize=8)
+        ax.set_xticklabels([f"{f} {p}" for f, p in keys], fontsize=8, rotation=40, ha="right")
         ax.set_yscale("log")
         ax.set_ylabel("planning time (ms)")
         ax.set_title(f"{robot}: MotionBenchMaker, successful plans (box: quartiles, whiskers: p5-p95)")

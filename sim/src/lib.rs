@@ -1,12 +1,21 @@
 //! # hearth-sim
 //!
-//! The physics backend (rapier3d world, robots with controllers, articulated furniture,
-//! scenes, sensors). It builds on [`hearth_planning`] and [`hearth_kinematics`]; the world
-//! itself is being written (see the project's issues).
+//! The physics backend, built on [`hearth_planning`] and [`hearth_kinematics`]:
+//!
+//! - [`world`]: the rapier3d world (deterministic stepping, snapshots, state hash), robots and
+//!   articulated objects as multibodies with controllers, readout, and the live-world
+//!   [`Obstacles`](hearth_planning::obstacles::Obstacles) view planners check against.
+//! - [`assets`]: household object categories generated as URDF (cabinets with drawers and
+//!   doors, fridges, tables, chairs, …, bowls and mugs), with a material table.
+//! - [`scene`]: the scene file format, procedural homes, traversability and room maps, URDF
+//!   export and scene statistics.
 //!
 //! ```
-//! let fetch = hearth_sim::kinematics::RobotModel::builtin("fetch").unwrap();
-//! assert!(fetch.link_index("base_link").is_ok());
+//! use hearth_sim::scene::{generate, GenerateOptions, SceneInfo};
+//!
+//! let home = generate(&GenerateOptions { seed: 1, rooms: 3, ..Default::default() }).unwrap();
+//! let info = SceneInfo::of(&home);
+//! assert!(info.rooms.len() >= 3);
 //! ```
 #![warn(missing_docs)]
 
