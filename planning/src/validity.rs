@@ -59,6 +59,24 @@ pub struct Attached {
     pub shape: SharedShape,
 }
 
+/// Which links move when the chain's joints move: those below a chain joint, or below a joint
+/// that mimics one.
+fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
+    let chain_vars = chain.variables();
+    let joints = model.joints();
+    let driven = |j: usize| {
+        let joint = &joints[j];
+        joint.variable.is_some_and(|v| chain_vars.contains(&v))
+            || joint
+                .mimic
+                .as_ref()
+                .is_some_and(|m| joints[m.joint].variable.is_some_and(|v| chain_vars.contains(&v)))
+    };
+    (0..model.links().len())
+        .map(|l| model.joints_to(l).into_iter().any(driven))
+        .collect()
+}
+
 /// The exact checker: forward kinematics of the whole robot, every link with geometry against
 /// the obstacles, the self-collision matrix's pairs against each other, and attached objects
 /// against both. Buffers are allocated once; checking does not allocate.
@@ -94,6 +112,13 @@ pub struct RobotValidity {
     poses: Vec<Isometry3<f64>>,
     checks: u64,
     broad: BroadPhase,
+    /// Per geometric link: whether its pose depends on the chain's joints.
+    link_moves: Vec<bool>,
+    /// Per checked pair: whether either link moves with the chain.
+    pair_moves: Vec<bool>,
+    /// Whether the links and pairs that never move with the chain are clear, once known for
+    /// the current reference, base and obstacles.
+    fixed_clear: Option<bool>,
 }
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
@@ -244,8 +269,14 @@ impl RobotValidity {
             .collect();
         let pairs = matrix.checked_geometric_pairs(&model);
         let broad = BroadPhase::new(&model, &geometric, &pairs);
+        let moves = moving_links(&model, &chain);
+        let link_moves = geometric.iter().map(|&l| moves[l]).collect();
+        let pair_moves = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         Self {
             broad,
+            link_moves,
+            pair_moves,
+            fixed_clear: None,
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -269,12 +300,14 @@ impl RobotValidity {
     pub fn set_reference(&mut self, q_full: &[f64]) -> Result<(), hearth_kinematics::KinematicsError> {
         self.model.check_configuration(q_full)?;
         self.q_full.copy_from_slice(q_full);
+        self.fixed_clear = None;
         Ok(())
     }
 
     /// Places the robot root in the world (e.g. a mobile base pose).
     pub fn set_base(&mut self, base: Isometry3<f64>) {
         self.base = base;
+        self.fixed_clear = None;
     }
 
     /// Attaches an object (a held object moves with the gripper). It is checked against the
@@ -419,9 +452,30 @@ impl RobotValidity {
         close && links_touch(&self.model, &self.poses, a, b)
     }
 
+    /// Links and pairs that do not move with the chain, checked once per reference, base and
+    /// obstacle set (the poses of the current configuration are used; theirs do not change).
+    fn fixed_blocked(&mut self) -> bool {
+        if let Some(clear) = self.fixed_clear {
+            return !clear;
+        }
+        let links = (0..self.geometric.len())
+            .filter(|&i| !self.link_moves[i])
+            .collect::<Vec<_>>();
+        let pairs = (0..self.pairs.len())
+            .filter(|&i| !self.pair_moves[i])
+            .collect::<Vec<_>>();
+        let blocked =
+            links.into_iter().any(|i| self.link_blocked(i)) || pairs.into_iter().any(|i| self.pair_blocked(i));
+        self.fixed_clear = Some(!blocked);
+        blocked
+    }
+
     /// The robot's own links (obstacles and self-collision), hint first.
     fn robot_blocked(&mut self) -> bool {
         self.update_centers();
+        if self.fixed_blocked() {
+            return true;
+        }
         let first = match self.broad.hint {
             Hint::Link(i) => self.link_blocked(i),
             Hint::Pair(i) => self.pair_blocked(i),
@@ -437,14 +491,14 @@ impl RobotValidity {
                 continue;
             }
             for i in range {
-                if skip != Hint::Link(i) && self.link_blocked(i) {
+                if self.link_moves[i] && skip != Hint::Link(i) && self.link_blocked(i) {
                     self.broad.hint = Hint::Link(i);
                     return true;
                 }
             }
         }
         for i in 0..self.pairs.len() {
-            if skip != Hint::Pair(i) && self.pair_blocked(i) {
+            if self.pair_moves[i] && skip != Hint::Pair(i) && self.pair_blocked(i) {
                 self.broad.hint = Hint::Pair(i);
                 return true;
             }

@@ -114,11 +114,18 @@ fn check_solution<S: Space + Clone, V: StateValidator>(
     assert!(states.len() >= 2, "a path has at least two states");
     assert_eq!(states[0], request.start, "the path starts at the start");
     let last = states.last().unwrap();
-    assert!(request.goal.states().iter().any(|g| same(g, last)), "the path ends at a goal: {last:?}");
+    assert!(
+        request.goal.states().iter().any(|g| same(g, last)),
+        "the path ends at a goal: {last:?}"
+    );
     let mut coarse = MotionValidator::new(space.clone(), resolution);
     for (i, w) in states.windows(2).enumerate() {
         assert!(validator.is_valid(&w[1]), "state {} is invalid", i + 1);
-        assert!(coarse.check_motion(validator, &w[0], &w[1]), "motion {i} → {} is invalid", i + 1);
+        assert!(
+            coarse.check_motion(validator, &w[0], &w[1]),
+            "motion {i} → {} is invalid",
+            i + 1
+        );
     }
     let mut rng = Pcg64Mcg::seed_from_u64(0);
     let fine_resolution = resolution / 10.0;
@@ -135,7 +142,11 @@ fn check_solution<S: Space + Clone, V: StateValidator>(
     assert_eq!(repaired.states.first(), states.first());
     assert_eq!(repaired.states.last(), states.last());
     for (i, w) in repaired.states.windows(2).enumerate() {
-        assert!(fine.check_motion(validator, &w[0], &w[1]), "repaired motion {i} → {} is invalid", i + 1);
+        assert!(
+            fine.check_motion(validator, &w[0], &w[1]),
+            "repaired motion {i} → {} is invalid",
+            i + 1
+        );
     }
 }
 

@@ -136,3 +136,30 @@ fn motion_validator_finds_the_wall_between_two_free_states() {
     assert!(mv.check_motion(&mut v, &a, &c));
     assert_eq!(v.checks() - before, mv.segments(&a, &c) as u64 - 1);
 }
+
+/// Links that do not move with the chain (the Fetch's base, wheels, head mount) are checked
+/// once per reference and base; moving the base must re-check them.
+#[test]
+fn fixed_links_are_rechecked_when_the_base_moves() {
+    use hearth_planning::obstacles::{Obstacle, ParryScene};
+    let m = hearth_kinematics::RobotModel::builtin("fetch").unwrap();
+    let arm = hearth_kinematics::Chain::named(&m, "arm").unwrap();
+    let acm = hearth_kinematics::SelfCollisionMatrix::compute(
+        &m,
+        &hearth_kinematics::SelfCollisionSettings { samples: 300, ..Default::default() },
+    );
+    // A low block 2 m in front of the robot: only the base can reach it.
+    let block = Obstacle::cuboid(
+        "block",
+        parry3d::math::Pose::translation(2.0, 0.0, 0.05),
+        parry3d::math::Vector::new(0.2, 0.2, 0.05),
+    );
+    let mut v = RobotValidity::new(arm, acm, std::sync::Arc::new(ParryScene::new(vec![block])));
+    let tucked = [1.32, 1.4, -0.2, 1.72, 0.0, 1.66, 0.0];
+    assert!(v.is_valid(&tucked));
+    v.set_base(nalgebra::Isometry3::translation(2.0, 0.0, 0.0));
+    assert!(!v.is_valid(&tucked), "the base now stands in the block");
+    assert!(!v.is_valid(&[0.0; 7]));
+    v.set_base(nalgebra::Isometry3::translation(0.0, 0.0, 0.0));
+    assert!(v.is_valid(&tucked));
+}
