@@ -304,6 +304,14 @@ impl RobotValidity {
         Ok(())
     }
 
+    /// Replaces the obstacles (e.g. a fresh view of a world that has moved on). The obstacles a
+    /// validator holds must not change their answers while it holds them: links that do not
+    /// move with the chain are checked once per reference, base and obstacle set.
+    pub fn set_obstacles(&mut self, obstacles: Arc<dyn Obstacles>) {
+        self.obstacles = obstacles;
+        self.fixed_clear = None;
+    }
+
     /// Places the robot root in the world (e.g. a mobile base pose).
     pub fn set_base(&mut self, base: Isometry3<f64>) {
         self.base = base;
