@@ -710,3 +710,67 @@ fn pose_goals_are_sampled_collision_free_and_reached() {
         Err(PlanError::BadInput(_))
     ));
 }
+
+/// A two-board shelf in front of the Panda; start and goal are IK solutions with the gripper
+/// pointing into the lower and the upper compartment.
+fn shelf_world_and_request() -> (JointSpace, RobotValidity, PlanRequest) {
+    use hearth_kinematics::IkTarget;
+    use hearth_kinematics::nalgebra::{Isometry3, Translation3, UnitQuaternion};
+    use hearth_planning::goal::PoseGoal;
+    let board =
+        |name: &str, z: f32| Obstacle::cuboid(name, Pose::translation(0.7, 0.0, z), Vector::new(0.2, 0.4, 0.01));
+    let side = |name: &str, y: f32| Obstacle::cuboid(name, Pose::translation(0.7, y, 0.6), Vector::new(0.2, 0.01, 0.3));
+    let scene = ParryScene::new(vec![
+        board("bottom", 0.35),
+        board("middle", 0.6),
+        board("top", 0.85),
+        side("left", 0.41),
+        side("right", -0.41),
+        Obstacle::cuboid("back", Pose::translation(0.91, 0.0, 0.6), Vector::new(0.01, 0.4, 0.3)),
+    ]);
+    let (space, mut v) = panda(scene);
+    let mut ik = panda_ik();
+    // Gripper pointing along +x (into the shelf).
+    let forward = UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
+    let mut rng = Pcg64Mcg::seed_from_u64(11);
+    let seed = [0.0, 0.3, 0.0, -1.8, 0.0, 2.1, 0.785];
+    let mut solve_at = |z: f64| {
+        let target = IkTarget::Pose(Isometry3::from_parts(Translation3::new(0.56, 0.0, z), forward));
+        PoseGoal::new(target).sample(&mut ik, &mut v, &seed, &mut rng).unwrap()
+    };
+    let start = solve_at(0.5).states()[0].clone();
+    let goal = solve_at(0.73);
+    (space, v, PlanRequest::new(start, goal))
+}
+
+#[test]
+fn panda_shelf_every_planner() {
+    let (space, mut v, request) = shelf_world_and_request();
+    solve(
+        "shelf/birrt",
+        BiRrt::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget(50_000),
+    );
+    solve(
+        "shelf/rrt",
+        Rrt::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget(100_000),
+    );
+    solve(
+        "shelf/lazy_prm",
+        LazyPrm::default,
+        &space,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget(100_000),
+    );
+}

@@ -146,7 +146,10 @@ fn fixed_links_are_rechecked_when_the_base_moves() {
     let arm = hearth_kinematics::Chain::named(&m, "arm").unwrap();
     let acm = hearth_kinematics::SelfCollisionMatrix::compute(
         &m,
-        &hearth_kinematics::SelfCollisionSettings { samples: 300, ..Default::default() },
+        &hearth_kinematics::SelfCollisionSettings {
+            samples: 300,
+            ..Default::default()
+        },
     );
     // A low block 2 m in front of the robot: only the base can reach it.
     let block = Obstacle::cuboid(
