@@ -45,6 +45,9 @@ pub struct ParryScene {
     obstacles: Vec<Obstacle>,
     /// Closed-form ball tests per obstacle, for [`Obstacles::ball_hits`].
     quick: Vec<Quick>,
+    /// Bounding sphere of every obstacle (centre x, y, z, radius), the first rejection test of
+    /// [`Obstacles::ball_hits`].
+    spheres: Vec<[Real; 4]>,
     bvh: Bvh,
     bounds: Option<Aabb>,
     margin: Real,
@@ -57,8 +60,17 @@ impl ParryScene {
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
         let bounds = aabbs.iter().copied().reduce(|a, b| a.merged(&b));
         let quick = obstacles.iter().map(Quick::of).collect();
+        let spheres = obstacles
+            .iter()
+            .map(|o| {
+                let b = o.shape.compute_bounding_sphere(&o.pose);
+                let c = b.center();
+                [c.x, c.y, c.z, b.radius() * (1.0 + 1e-5) + 1e-6]
+            })
+            .collect();
         Self {
             quick,
+            spheres,
             obstacles,
             bvh,
             bounds,
