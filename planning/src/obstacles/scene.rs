@@ -45,9 +45,9 @@ pub struct ParryScene {
     obstacles: Vec<Obstacle>,
     /// Closed-form ball tests per obstacle, for [`Obstacles::ball_hits`].
     quick: Vec<Quick>,
-    /// Bounding sphere of every obstacle (centre x, y, z, radius), the first rejection test of
-    /// [`Obstacles::ball_hits`].
-    spheres: Vec<[Real; 4]>,
+    /// Bounding boxes of every obstacle as structure-of-arrays, the first rejection test of
+    /// [`Obstacles::ball_hits`] (eight obstacles per step).
+    boxes: SoaBoxes,
     bvh: Bvh,
     bounds: Option<Aabb>,
     margin: Real,
@@ -60,17 +60,10 @@ impl ParryScene {
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
         let bounds = aabbs.iter().copied().reduce(|a, b| a.merged(&b));
         let quick = obstacles.iter().map(Quick::of).collect();
-        let spheres = obstacles
-            .iter()
-            .map(|o| {
-                let b = o.shape.compute_bounding_sphere(&o.pose);
-                let c = b.center();
-                [c.x, c.y, c.z, b.radius() * (1.0 + 1e-5) + 1e-6]
-            })
-            .collect();
+        let boxes = SoaBoxes::new(&aabbs);
         Self {
             quick,
-            spheres,
+            boxes,
             obstacles,
             bvh,
             bounds,
@@ -145,6 +138,61 @@ impl ParryScene {
 impl FromIterator<Obstacle> for ParryScene {
     fn from_iter<I: IntoIterator<Item = Obstacle>>(iter: I) -> Self {
         Self::new(iter.into_iter().collect())
+    }
+}
+
+/// Axis-aligned boxes as structure-of-arrays, padded to a multiple of 8 with empty boxes.
+#[derive(Clone, Debug, Default)]
+struct SoaBoxes {
+    /// min x, min y, min z, max x, max y, max z.
+    bounds: [Vec<Real>; 6],
+    len: usize,
+}
+
+impl SoaBoxes {
+    fn new(aabbs: &[Aabb]) -> Self {
+        let padded = aabbs.len().div_ceil(8) * 8;
+        let mut bounds: [Vec<Real>; 6] =
+            std::array::from_fn(|k| vec![if k < 3 { Real::MAX } else { Real::MIN }; padded]);
+        for (i, a) in aabbs.iter().enumerate() {
+            for (k, v) in [a.mins.x, a.mins.y, a.mins.z, a.maxs.x, a.maxs.y, a.maxs.z]
+                .into_iter()
+                .enumerate()
+            {
+                bounds[k][i] = v;
+            }
+        }
+        Self {
+            bounds,
+            len: aabbs.len(),
+        }
+    }
+
+    /// Whether `exact(i)` holds for some box `i` within `r` of `c` (boxes checked eight at a
+    /// time, `exact` only on those close enough).
+    #[inline]
+    fn any_near(&self, c: Vector, r: Real, mut exact: impl FnMut(usize) -> bool) -> bool {
+        let [x0, y0, z0, x1, y1, z1] = &self.bounds;
+        let r2 = r * r;
+        for chunk in 0..x0.len() / 8 {
+            let base = chunk * 8;
+            let mut mask = 0u32;
+            for k in 0..8 {
+                let i = base + k;
+                let dx = (x0[i] - c.x).max(c.x - x1[i]).max(0.0);
+                let dy = (y0[i] - c.y).max(c.y - y1[i]).max(0.0);
+                let dz = (z0[i] - c.z).max(c.z - z1[i]).max(0.0);
+                mask |= u32::from(dx * dx + dy * dy + dz * dz <= r2) << k;
+            }
+            while mask != 0 {
+                let i = base + mask.trailing_zeros() as usize;
+                if i < self.len && exact(i) {
+                    return true;
+                }
+                mask &= mask - 1;
+            }
+        }
+        false
     }
 }
 
@@ -264,15 +312,12 @@ impl Obstacles for ParryScene {
         if !(center.is_finite() && r.is_finite()) {
             return true;
         }
-        if self.quick.len() <= 32 {
-            return self.quick.iter().enumerate().any(|(i, q)| {
-                q.ball(center, r).unwrap_or_else(|| {
-                    self.touches(
-                        i as u32,
-                        &parry3d::shape::Ball::new(radius),
-                        &Pose::from_translation(center),
-                    )
-                })
+        if self.quick.len() <= 64 {
+            let ball = || parry3d::shape::Ball::new(radius);
+            return self.boxes.any_near(center, r, |i| {
+                self.quick[i]
+                    .ball(center, r)
+                    .unwrap_or_else(|| self.touches(i as u32, &ball(), &Pose::from_translation(center)))
             });
         }
         let query_box = Aabb::new(center - Vector::splat(r), center + Vector::splat(r));
