@@ -275,7 +275,7 @@ impl<S: Space> Planner<S> for LazyPrm {
         }
         let mut run = Run::start(budget, motion, validator);
         let space = motion.space();
-        let range = resolve_range(space, self.settings.range)?;
+        let range = resolve_range(space, self.settings.range, 1.0)?;
         let goals = valid_goals(space, validator, request, budget)?;
         let dim = space.dim();
         let roadmap = match &mut self.roadmap {

@@ -298,15 +298,15 @@ pub fn default_range<S: Space>(space: &S) -> f64 {
 }
 
 /// The step size from a setting: `Some(r)` must be positive and finite, `None` is
-/// [`default_range`] (or 1 for a zero-extent space).
-pub(crate) fn resolve_range<S: Space>(space: &S, range: Option<f64>) -> Result<f64, PlanError> {
+/// [`default_range`] times `scale` (or 1 for a zero-extent space).
+pub(crate) fn resolve_range<S: Space>(space: &S, range: Option<f64>, scale: f64) -> Result<f64, PlanError> {
     match range {
         Some(r) if r.is_finite() && r > 0.0 => Ok(r),
         Some(r) => Err(PlanError::BadInput(format!(
             "range is {r}; it must be positive and finite"
         ))),
         None => {
-            let r = default_range(space);
+            let r = default_range(space) * scale;
             Ok(if r.is_finite() && r > 0.0 { r } else { 1.0 })
         }
     }

@@ -74,7 +74,7 @@ impl<S: Space> Planner<S> for Rrt {
         }
         let mut run = Run::start(budget, motion, validator);
         let space = motion.space();
-        let range = resolve_range(space, self.range)?;
+        let range = resolve_range(space, self.range, 1.0)?;
         let goals = valid_goals(space, validator, request, budget)?;
         let dim = space.dim();
         let mut tree = Tree::new(dim);

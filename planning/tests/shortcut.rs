@@ -13,17 +13,27 @@ use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
-/// Two walls with gaps at opposite ends: a zig-zag world where shortcuts matter.
+/// Two walls with gaps at opposite ends: a zig-zag world where shortcuts matter. `shrink`
+/// thins the walls on every side (a sampled check can graze a corner by less than its
+/// resolution; final checks use a shrunk copy to allow for that).
 #[derive(Default)]
 struct Walls {
     checks: u64,
+    shrink: f64,
+}
+
+impl Walls {
+    fn shrunk(by: f64) -> Self {
+        Self { checks: 0, shrink: by }
+    }
 }
 
 impl StateValidator for Walls {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
-        let wall1 = (0.3..=0.35).contains(&q[0]) && q[1] < 0.8;
-        let wall2 = (0.65..=0.7).contains(&q[0]) && q[1] > 0.2;
+        let e = self.shrink;
+        let wall1 = (0.3 + e..=0.35 - e).contains(&q[0]) && q[1] < 0.8 - e;
+        let wall2 = (0.65 + e..=0.7 - e).contains(&q[0]) && q[1] > 0.2 + e;
         !(wall1 || wall2)
     }
     fn checks(&self) -> u64 {
@@ -371,6 +381,7 @@ proptest! {
         let before = t.duration();
         shortcut::parabolic(&mut motion, &mut Walls::default(), &mut t, &limits, &settings, &mut rng).unwrap();
         prop_assert!(t.duration() <= before + 1e-12);
-        prop_assert!(t.check(motion.space(), &mut Walls::default(), 0.005).is_ok());
+        // Planner edges are checked every 0.005: a corner may be grazed by less than that.
+        prop_assert!(t.check(motion.space(), &mut Walls::shrunk(0.003), 0.0005).is_ok());
     }
 }

@@ -60,6 +60,9 @@ pub struct BenchPlanArgs {
     /// re-validated at a tenth of it.
     #[arg(long, default_value_t = 0.02)]
     resolution: f64,
+    /// Longest planner step (rad); default 0.2 × the space's extent, as in OMPL.
+    #[arg(long)]
+    range: Option<f64>,
     /// Path post-processing.
     #[arg(long, value_enum, default_value_t = ShortcutKind::Parabolic)]
     shortcut: ShortcutKind,
@@ -148,6 +151,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.time_limit.is_nan() || a.time_limit <= 0.0 || a.resolution.is_nan() || a.resolution <= 0.0 {
         bail!("--time-limit and --resolution must be positive");
     }
+    if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
+        bail!("--range must be positive");
+    }
     let mut sets: Vec<(ProblemSet, Option<PathBuf>)> = Vec::new();
     for p in &a.problems {
         if p.is_dir() {
@@ -202,11 +208,19 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(a.seed ^ ((problem.id as u64) << 20) ^ rep as u64);
                 let before = v.checks();
                 let outcome = match a.planner {
-                    PlannerKind::Rrt => Rrt::default().plan(&mut motion, &mut v, &request, &budget, &mut rng),
-                    PlannerKind::Birrt => BiRrt::default().plan(&mut motion, &mut v, &request, &budget, &mut rng),
-                    PlannerKind::Lazyprm => {
-                        LazyPrm::new(LazyPrmSettings::default()).plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                    PlannerKind::Rrt => Rrt {
+                        range: a.range,
+                        ..Rrt::default()
                     }
+                    .plan(&mut motion, &mut v, &request, &budget, &mut rng),
+                    PlannerKind::Birrt => {
+                        BiRrt { range: a.range }.plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                    }
+                    PlannerKind::Lazyprm => LazyPrm::new(LazyPrmSettings {
+                        range: a.range,
+                        ..LazyPrmSettings::default()
+                    })
+                    .plan(&mut motion, &mut v, &request, &budget, &mut rng),
                 };
                 match outcome {
                     Err(hearth_planning::PlanError::InvalidGoals { .. }) => {
