@@ -431,3 +431,52 @@ fn bench_plan_writes_results_json() {
     assert!(!String::from_utf8_lossy(&bad.stderr).contains("panicked"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn bench_sim_writes_json() {
+    let dir = temp_dir("bench_sim");
+    let path = dir.join("sim.json");
+    let args = [
+        "bench",
+        "sim",
+        "--generate",
+        "1",
+        "--rooms",
+        "2",
+        "--robot",
+        "fetch",
+        "--steps",
+        "8",
+        "--chunks",
+        "2",
+        "--settle",
+        "5",
+        "--no-sleep",
+        "--json",
+        path.to_str().unwrap(),
+    ];
+    let o = hearth(&args);
+    assert!(o.status.success(), "bench sim failed: {}", stderr(&o));
+    let text = std::fs::read_to_string(&path).expect("bench sim wrote its JSON file");
+    let report: Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"));
+    for key in ["physics_hz_median", "physics_hz_median_without_robot"] {
+        let hz = report[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("`{key}` missing: {report}"));
+        assert!(hz.is_finite() && hz > 0.0, "{key} = {hz}");
+    }
+    assert_eq!(report["robot"], "fetch");
+    assert_eq!(report["sleeping"], false);
+    let bodies = report["bodies"].as_u64().expect("bodies");
+    assert!(bodies > report["bodies_without_robot"].as_u64().unwrap(), "{report}");
+    // The same run gives the same final state.
+    let hash = report["state_hash"].as_str().expect("state_hash").to_owned();
+    assert!(hearth(&args).status.success());
+    let again: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(again["state_hash"].as_str(), Some(hash.as_str()));
+    // Neither a scene nor a seed: a clean error.
+    fails(&["bench", "sim", "--robot", "none"]);
+    let err = fails(&["bench", "sim", "--scene", "/nonexistent/home.json"]);
+    assert!(err.contains("/nonexistent/home.json"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -17,6 +17,8 @@ pub enum BenchCommand {
     Kin(BenchKinArgs),
     /// Planners on benchmark problem files (MotionBenchMaker JSON).
     Plan(super::bench_plan::BenchPlanArgs),
+    /// Physics steps per second of a settled home, with and without the robot.
+    Sim(super::bench_sim::BenchSimArgs),
 }
 
 #[derive(Args, Debug)]
@@ -42,6 +44,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Kin(a) => kin(a),
         BenchCommand::Plan(a) => super::bench_plan::run(a),
+        BenchCommand::Sim(a) => super::bench_sim::run(a),
     }
 }
 

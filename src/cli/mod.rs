@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_plan;
+mod bench_sim;
 mod demo;
 mod kin;
 mod scene;

@@ -65,12 +65,34 @@ fn write(path: &Path, text: &str) -> Result<(), SceneError> {
     std::fs::write(path, text).map_err(|e| SceneError::io(path, e))
 }
 
-/// The building's floors, walls (openings cut out) and ceilings as one fixed URDF body.
-fn building_urdf(scene: &SceneFile) -> String {
-    let mut w = UrdfWriter::new("building", 1.0);
-    let base = w.base();
+/// One solid box of the building: a floor or ceiling slab (its polygon's bounding box), or a
+/// wall piece left between openings. Export writes them into one URDF body; the physics world
+/// spawns each as a fixed body.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct BuildingBox {
+    /// `floor/NAME`, `ceiling/NAME` or `wall/NAME/PIECE`.
+    pub(crate) name: String,
+    /// Full size along the box's own x, y, z.
+    pub(crate) size: [f64; 3],
+    /// Centre in the world.
+    pub(crate) center: [f64; 3],
+    /// Rotation about z.
+    pub(crate) yaw: f64,
+    /// Surface material.
+    pub(crate) material: crate::assets::Material,
+}
+
+impl SceneFile {
+    /// The building's floors, ceilings and walls (openings cut out) as boxes, in that order.
+    pub(crate) fn building_boxes(&self) -> Vec<BuildingBox> {
+        building_boxes(self)
+    }
+}
+
+fn building_boxes(scene: &SceneFile) -> Vec<BuildingBox> {
     let b = &scene.building;
-    for (slabs, up) in [(&b.floors, false), (&b.ceilings, true)] {
+    let mut out = Vec::new();
+    for (slabs, kind, up) in [(&b.floors, "floor", false), (&b.ceilings, "ceiling", true)] {
         for s in slabs {
             let room = super::Room {
                 name: String::new(),
@@ -83,23 +105,36 @@ fn building_urdf(scene: &SceneFile) -> String {
             } else {
                 s.z - s.thickness / 2.0
             };
-            let size = [hi[0] - lo[0], hi[1] - lo[1], s.thickness];
-            w.add(
-                base,
-                Part::cuboid(size, [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, zc], s.material),
-            );
+            out.push(BuildingBox {
+                name: format!("{kind}/{}", s.name),
+                size: [hi[0] - lo[0], hi[1] - lo[1], s.thickness],
+                center: [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, zc],
+                yaw: 0.0,
+                material: s.material,
+            });
         }
     }
     for wall in &b.walls {
-        for [s0, s1, zb, zt] in wall.pieces() {
+        for (k, [s0, s1, zb, zt]) in wall.pieces().into_iter().enumerate() {
             let mid = wall.point_at((s0 + s1) / 2.0);
-            let part = Part::cuboid(
-                [s1 - s0, wall.thickness, zt - zb],
-                [mid[0], mid[1], (zb + zt) / 2.0],
-                wall.material,
-            );
-            w.add(base, part.yawed(wall.yaw()));
+            out.push(BuildingBox {
+                name: format!("wall/{}/{k}", wall.name),
+                size: [s1 - s0, wall.thickness, zt - zb],
+                center: [mid[0], mid[1], (zb + zt) / 2.0],
+                yaw: wall.yaw(),
+                material: wall.material,
+            });
         }
+    }
+    out
+}
+
+/// The building's boxes as one fixed URDF body.
+fn building_urdf(scene: &SceneFile) -> String {
+    let mut w = UrdfWriter::new("building", 1.0);
+    let base = w.base();
+    for b in building_boxes(scene) {
+        w.add(base, Part::cuboid(b.size, b.center, b.material).yawed(b.yaw));
     }
     w.finish().urdf
 }

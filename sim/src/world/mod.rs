@@ -12,6 +12,8 @@
 //! - Readout: [`World::joint_positions`], [`World::joint_velocities`],
 //!   [`World::joint_efforts`], [`World::base_pose`], [`World::base_twist`],
 //!   [`World::link_pose`], [`World::contacts`].
+//! - [`World::load_scene`] spawns a [`crate::scene::SceneFile`] (building, objects, robot);
+//!   [`World::settle`] steps until it rests.
 //! - [`World::snapshot`] / [`World::restore`] and [`World::state_hash`] for exact rollbacks.
 //! - [`World::obstacles_view`] implements planning's
 //!   [`Obstacles`](hearth_planning::obstacles::Obstacles) over the live colliders.
@@ -51,6 +53,7 @@ mod error;
 mod obstacles;
 mod physics;
 mod readout;
+mod scene_load;
 mod snapshot;
 mod spawn;
 
@@ -60,5 +63,8 @@ pub use error::{WorldError, WorldResult};
 pub use obstacles::WorldObstacles;
 pub use physics::{BodyId, World};
 pub use readout::{ContactInfo, Twist};
+pub use scene_load::{
+    BUILDING_PREFIX, LoadSceneError, LoadedScene, REST_ANGULAR_SPEED, REST_LINEAR_SPEED, SettleReport,
+};
 pub use snapshot::Snapshot;
 pub use spawn::{BaseMode, ModelHandle, SpawnOptions, named_configuration};
