@@ -170,7 +170,12 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         if space.distance(&a, &b) >= along - 1e-9 {
             continue;
         }
-        if !motion.check_motion(validator, &a, &b) || !fine.as_mut().is_none_or(|f| f.check_motion(validator, &a, &b)) {
+        // Points inside edges were never checked themselves: check them first.
+        if !validator.is_valid(&a)
+            || !validator.is_valid(&b)
+            || !motion.check_motion(validator, &a, &b)
+            || !fine.as_mut().is_none_or(|f| f.check_motion(validator, &a, &b))
+        {
             continue;
         }
         let mut next = Vec::with_capacity(states.len());
