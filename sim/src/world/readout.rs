@@ -234,8 +234,16 @@ impl World {
                     let impulse = pair.total_impulse();
                     let point = pair
                         .find_deepest_contact()
-                        .and_then(|(_, c)| {
-                            Some(s.colliders.get(pair.collider1)?.position().transform_point(c.local_p1))
+                        .and_then(|(manifold, c)| {
+                            // The point on this link's collider; points of a compound's part are
+                            // in that part's frame.
+                            let (local, part) = if pair.collider1 == ch {
+                                (c.local_p1, manifold.subshape_pos1())
+                            } else {
+                                (c.local_p2, manifold.subshape_pos2())
+                            };
+                            let local = part.map_or(local, |p| p.transform_point(local));
+                            Some(s.colliders.get(ch)?.position().transform_point(local))
                         })
                         .unwrap_or(Vector::ZERO);
                     let force = Vector3::new(impulse.x.into(), impulse.y.into(), impulse.z.into()) * (sign * inv_dt);
