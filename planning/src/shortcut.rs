@@ -138,12 +138,13 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let mut states = path.states.clone();
     let mut stats = ShortcutStats::default();
     let space = motion.space().clone();
+    // Arc lengths change only when a shortcut is accepted.
+    let mut acc = cumulative(&space, &states);
     for _ in 0..settings.attempts {
         if states.len() < 3 || clock.expired() {
             break;
         }
         stats.attempts += 1;
-        let acc = cumulative(&space, &states);
         let total = *acc.last().unwrap_or(&0.0);
         let (i, a, j, b) = if rng.random_bool(0.5) {
             let (mut x, mut y) = (rng.random_range(0..states.len()), rng.random_range(0..states.len()));
@@ -188,6 +189,7 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         }
         next.extend_from_slice(&states[j + 1..]);
         states = next;
+        acc = cumulative(&space, &states);
         stats.accepted += 1;
     }
     stats.time = clock.start.elapsed();

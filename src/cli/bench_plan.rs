@@ -313,19 +313,15 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             .filter(|r| r["success"] == json!(true))
             .copied()
             .collect();
-        let times: Vec<f64> = ok
-            .iter()
-            .filter_map(|r| r["plan_time_s"].as_f64())
-            .map(|t| t * 1e3)
-            .collect();
-        let lengths: Vec<f64> = ok.iter().filter_map(|r| r["path_length"].as_f64()).collect();
-        let checks: Vec<f64> = ok.iter().filter_map(|r| r["checks"].as_f64()).collect();
-        let shortcut: Vec<f64> = ok
-            .iter()
-            .filter_map(|r| r["shortcut_time_s"].as_f64())
-            .map(|t| t * 1e3)
-            .collect();
-        let durations: Vec<f64> = ok.iter().filter_map(|r| r["duration_s"].as_f64()).collect();
+        // One numeric field of the successful rows, scaled.
+        let column = |key: &str, scale: f64| -> Vec<f64> {
+            ok.iter().filter_map(|r| r[key].as_f64()).map(|v| v * scale).collect()
+        };
+        let times = column("plan_time_s", 1e3);
+        let lengths = column("path_length", 1.0);
+        let checks = column("checks", 1.0);
+        let shortcut = column("shortcut_time_s", 1e3);
+        let durations = column("duration_s", 1.0);
         let rate = ok.len() as f64 / attempted.len().max(1) as f64;
         println!(
             "{:<18} {:>6} {:>7} {:>8.1}% {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",

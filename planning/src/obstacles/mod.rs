@@ -37,6 +37,66 @@ use parry3d::shape::{Shape, SharedShape, TriMeshBuilderError};
 
 pub use scene::ParryScene;
 
+/// The nearest leaf of `bvh` to the box `query` within `max_dist`, for implementations of
+/// [`Obstacles::distance`] over a parry [`Bvh`](parry3d::partitioning::Bvh): subtrees whose
+/// boxes are farther than the best distance so far are pruned, and `distance(leaf)` gives a
+/// leaf's exact distance (`None` skips the leaf, e.g. an excluded collider). Ties keep the
+/// first leaf found; a distance of 0 ends the search.
+///
+/// ```
+/// use hearth_planning::obstacles::nearest_leaf;
+/// use parry3d::bounding_volume::Aabb;
+/// use parry3d::math::Vector;
+/// use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+///
+/// let boxes = [Aabb::new(Vector::ZERO, Vector::ONE), Aabb::new(Vector::splat(3.0), Vector::splat(4.0))];
+/// let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+/// let query = Aabb::new(Vector::splat(2.0), Vector::splat(2.5));
+/// // Leaf distances here are just box gaps; leaf 0 is skipped.
+/// let gap = |i: u32| boxes[i as usize].mins.x - 2.5;
+/// assert_eq!(nearest_leaf(&bvh, &query, 10.0, |i| Some(gap(i).abs())).map(|(_, id)| id.0), Some(1));
+/// assert_eq!(nearest_leaf(&bvh, &query, 10.0, |i| (i == 1).then(|| gap(i))).map(|(d, _)| d), Some(0.5));
+/// assert_eq!(nearest_leaf(&bvh, &query, 0.1, |i| Some(gap(i).abs())), None);
+/// ```
+pub fn nearest_leaf(
+    bvh: &parry3d::partitioning::Bvh,
+    query: &Aabb,
+    max_dist: Real,
+    mut distance: impl FnMut(u32) -> Option<Real>,
+) -> Option<(Real, ObstacleId)> {
+    use parry3d::partitioning::{BvhNode, TraversalAction};
+    if max_dist.is_nan() || max_dist < 0.0 {
+        return None;
+    }
+    let mut best = max_dist;
+    let mut best_id: Option<u32> = None;
+    bvh.traverse(|node: &BvhNode| {
+        let gap = aabb_gap(&node.aabb(), query);
+        if gap > best || (best_id.is_some() && gap >= best) {
+            return TraversalAction::Prune;
+        }
+        if let Some(leaf) = node.leaf_data()
+            && let Some(d) = distance(leaf)
+            && (d < best || (best_id.is_none() && d <= best))
+        {
+            best = d;
+            best_id = Some(leaf);
+            if d <= 0.0 {
+                return TraversalAction::EarlyExit;
+            }
+        }
+        TraversalAction::Continue
+    });
+    best_id.map(|i| (best, ObstacleId(i)))
+}
+
+/// Euclidean gap between two boxes (0 when they overlap): a lower bound on the distance between
+/// anything inside them.
+#[inline]
+fn aabb_gap(a: &Aabb, b: &Aabb) -> Real {
+    (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO).length()
+}
+
 /// Index of an obstacle in an [`Obstacles`] implementation (for [`ParryScene`]: its position in
 /// [`ParryScene::obstacles`]).
 ///

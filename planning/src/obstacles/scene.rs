@@ -2,11 +2,11 @@
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Real, Vector};
-use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::{self, Ray};
 use parry3d::shape::Shape;
 
-use super::{Obstacle, ObstacleId, Obstacles};
+use super::{Obstacle, ObstacleId, Obstacles, nearest_leaf};
 
 /// A static obstacle scene: named parry shapes at fixed world poses, with a BVH over their
 /// bounding boxes built once at construction.
@@ -288,13 +288,6 @@ impl Quick {
     }
 }
 
-/// Euclidean gap between two boxes (0 when they overlap): a lower bound on the distance between
-/// anything inside them.
-#[inline]
-fn aabb_gap(a: &Aabb, b: &Aabb) -> Real {
-    (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO).length()
-}
-
 impl Obstacles for ParryScene {
     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
         if self.obstacles.is_empty() {
@@ -329,31 +322,13 @@ impl Obstacles for ParryScene {
     }
 
     fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
-        if self.obstacles.is_empty() || max_dist.is_nan() || max_dist < 0.0 {
+        if self.obstacles.is_empty() {
             return None;
         }
-        let query_box = shape.compute_aabb(pose);
-        let mut best = max_dist;
-        let mut best_id: Option<u32> = None;
-        self.bvh.traverse(|node: &BvhNode| {
-            let gap = aabb_gap(&node.aabb(), &query_box);
-            if gap > best || (best_id.is_some() && gap >= best) {
-                return TraversalAction::Prune;
-            }
-            if let Some(i) = node.leaf_data() {
-                let o = &self.obstacles[i as usize];
-                let d = query::distance(pose, shape, &o.pose, &*o.shape).map_or(0.0, |d| d.distance);
-                if d < best || (best_id.is_none() && d <= best) {
-                    best = d;
-                    best_id = Some(i);
-                    if d <= 0.0 {
-                        return TraversalAction::EarlyExit;
-                    }
-                }
-            }
-            TraversalAction::Continue
-        });
-        best_id.map(|i| (best, ObstacleId(i)))
+        nearest_leaf(&self.bvh, &shape.compute_aabb(pose), max_dist, |i| {
+            let o = &self.obstacles[i as usize];
+            Some(query::distance(pose, shape, &o.pose, &*o.shape).map_or(0.0, |d| d.distance))
+        })
     }
 
     fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)> {

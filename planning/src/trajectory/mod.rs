@@ -164,14 +164,14 @@ fn check_dim(limits: &Limits, dim: usize) -> Result<(), TrajectoryError> {
 }
 
 impl Trajectory {
-    fn from_pieces(dim: usize, pieces: Vec<Piece>, durations: fn(&Piece) -> f64) -> Self {
+    fn from_pieces(dim: usize, pieces: Vec<Piece>) -> Self {
         let mut t = Self {
             dim,
             spans: Vec::with_capacity(pieces.len()),
             ends: Vec::with_capacity(pieces.len()),
         };
         for piece in pieces {
-            let duration = durations(&piece);
+            let duration = piece.duration();
             t.spans.push(Span {
                 piece: Arc::new(piece),
                 offset: 0.0,
@@ -210,7 +210,7 @@ impl Trajectory {
         if pieces.is_empty() {
             pieces.push(Piece::Line(LineRamp::new(&states[0], &vec![0.0; space.dim()], limits)));
         }
-        Ok(Self::from_pieces(space.dim(), pieces, Piece::duration))
+        Ok(Self::from_pieces(space.dim(), pieces))
     }
 
     /// A jerk-limited motion (Ruckig) from rest at the first waypoint to rest at the last that
@@ -220,11 +220,7 @@ impl Trajectory {
         check_dim(limits, space.dim())?;
         let states = unwrapped(space, path)?;
         let g = generator::through(&states, limits)?;
-        Ok(Self::from_pieces(
-            space.dim(),
-            vec![Piece::Generated(Box::new(g))],
-            Piece::duration,
-        ))
+        Ok(Self::from_pieces(space.dim(), vec![Piece::Generated(Box::new(g))]))
     }
 
     /// A jerk-limited motion (Ruckig, phase-synchronised) that stops at every waypoint and
@@ -241,7 +237,7 @@ impl Trajectory {
         if pieces.is_empty() {
             pieces.push(Piece::Line(LineRamp::new(&states[0], &zero, limits)));
         }
-        Ok(Self::from_pieces(space.dim(), pieces, Piece::duration))
+        Ok(Self::from_pieces(space.dim(), pieces))
     }
 
     /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` within `limits` (Ruckig; with
@@ -261,11 +257,7 @@ impl Trajectory {
             }
         }
         let g = generator::between(q0, v0, q1, v1, limits, Sync::Time)?;
-        Ok(Self::from_pieces(
-            n,
-            vec![Piece::Generated(Box::new(g))],
-            Piece::duration,
-        ))
+        Ok(Self::from_pieces(n, vec![Piece::Generated(Box::new(g))]))
     }
 
     /// Replaces `[t1, t2]` by `other` (one span), which must join the states at both times.
@@ -419,13 +411,14 @@ impl Trajectory {
     /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
     /// time step to the local speed.
     fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) {
-        discretise_with(
+        discretise_timed(
             self.dim,
             self.duration(),
             |t, q| self.sample(t, q, None),
             space,
             resolution,
             out,
+            None,
         );
     }
 
@@ -518,17 +511,6 @@ fn discretise_timed<S: Space>(
             dt *= 1.5;
         }
     }
-}
-
-fn discretise_with<S: Space>(
-    dim: usize,
-    duration: f64,
-    sample: impl FnMut(f64, &mut [f64]),
-    space: &S,
-    resolution: f64,
-    out: &mut Vec<f64>,
-) {
-    discretise_timed(dim, duration, sample, space, resolution, out, None)
 }
 
 /// Index of an invalid state among `flat` (`dim` per state), checked midpoints first and the

@@ -3,10 +3,9 @@
 
 use std::sync::Arc;
 
-use hearth_planning::obstacles::{ObstacleId, Obstacles};
+use hearth_planning::obstacles::{ObstacleId, Obstacles, nearest_leaf};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Real, Vector};
-use parry3d::partitioning::{BvhNode, TraversalAction};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher, Ray};
 use parry3d::shape::Shape;
 use rapier3d::prelude::{
@@ -161,11 +160,6 @@ impl WorldObstacles {
     }
 }
 
-/// Euclidean gap between two boxes (0 when they overlap).
-fn aabb_gap(a: &Aabb, b: &Aabb) -> Real {
-    (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO).length()
-}
-
 impl Obstacles for WorldObstacles {
     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
         let query = shape.compute_aabb(pose).loosened(self.margin);
@@ -178,38 +172,18 @@ impl Obstacles for WorldObstacles {
     }
 
     fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
-        if max_dist.is_nan() || max_dist < 0.0 {
-            return None;
-        }
         let query = shape.compute_aabb(pose);
-        let mut best = max_dist;
-        let mut best_id: Option<u32> = None;
         self.with_pipeline(|qp| {
-            qp.bvh.traverse(|node: &BvhNode| {
-                let gap = aabb_gap(&node.aabb(), &query);
-                if gap > best || (best_id.is_some() && gap >= best) {
-                    return TraversalAction::Prune;
-                }
-                if let Some(leaf) = node.leaf_data()
-                    && let Some(co) = self.candidate(leaf)
-                {
-                    let pos12 = pose.inv_mul(co.position());
-                    let d = self
-                        .dispatcher()
+            nearest_leaf(qp.bvh, &query, max_dist, |leaf| {
+                let co = self.candidate(leaf)?;
+                let pos12 = pose.inv_mul(co.position());
+                Some(
+                    self.dispatcher()
                         .distance(&pos12, shape, co.shape())
-                        .map_or(0.0, |dist| dist.distance);
-                    if d < best || (best_id.is_none() && d <= best) {
-                        best = d;
-                        best_id = Some(leaf);
-                        if d <= 0.0 {
-                            return TraversalAction::EarlyExit;
-                        }
-                    }
-                }
-                TraversalAction::Continue
-            });
-        });
-        best_id.map(|i| (best, ObstacleId(i)))
+                        .map_or(0.0, |dist| dist.distance),
+                )
+            })
+        })
     }
 
     fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)> {
