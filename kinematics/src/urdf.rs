@@ -389,6 +389,7 @@ pub(crate) fn build(
             base_dir,
             &resolver,
             options,
+            &robot.materials,
         )?);
     }
 
@@ -463,6 +464,7 @@ fn build_link(
     base_dir: Option<&Path>,
     resolver: &PackageResolver,
     options: &LoadOptions,
+    named_materials: &[urdf_rs::Material],
 ) -> Result<Link> {
     let element = format!("link `{}`", l.name);
     let inertial = {
@@ -504,7 +506,14 @@ fn build_link(
         let (material, rgba) = match &v.material {
             Some(m) => (
                 (!m.name.is_empty()).then(|| m.name.clone()),
-                m.color.as_ref().map(|c| c.rgba.0),
+                // A visual may refer to a material defined once at the robot level.
+                m.color.as_ref().or_else(|| {
+                    named_materials
+                        .iter()
+                        .find(|n| n.name == m.name)
+                        .and_then(|n| n.color.as_ref())
+                })
+                .map(|c| c.rgba.0),
             ),
             None => (None, None),
         };

@@ -576,6 +576,7 @@ fn visual_only_mesh_with_material() {
     }
     let v = &link.visuals[1];
     assert_eq!(v.material.as_deref(), Some("shared_blue"));
+    assert_eq!(v.rgba, Some([0.0, 0.0, 1.0, 1.0]), "colour of the robot-level material");
     assert!(matches!(v.geometry, Geometry::Mesh { .. }));
 
     // A missing visual mesh is an error too (not silently skipped).

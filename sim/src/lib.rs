@@ -21,6 +21,7 @@
 
 pub mod assets;
 pub mod scene;
+pub mod sensors;
 pub mod world;
 
 /// The kinematics crate this one builds on.

@@ -61,7 +61,7 @@ pub use config::WorldConfig;
 pub use control::{DiffDriveConfig, GripperConfig, JointCommand, JointGains};
 pub use error::{WorldError, WorldResult};
 pub use obstacles::WorldObstacles;
-pub use physics::{BodyId, World};
+pub use physics::{BodyId, StaticVisual, World};
 pub use readout::{ContactInfo, Twist};
 pub use scene_load::{
     BUILDING_PREFIX, LoadSceneError, LoadedScene, REST_ANGULAR_SPEED, REST_LINEAR_SPEED, SettleReport,

@@ -7,6 +7,8 @@ use hearth_kinematics::{from_pose, to_pose};
 use rapier3d::prelude::*;
 
 use super::config::WorldConfig;
+use crate::assets::Material;
+use crate::scene::Light;
 use super::error::{WorldError, WorldResult, check_finite};
 use super::spawn::ModelEntry;
 
@@ -36,6 +38,26 @@ impl BodyId {
     }
 }
 
+/// A box that is seen but not simulated (see [`World::static_visuals`]).
+///
+/// ```
+/// use hearth_sim::assets::Material;
+/// use hearth_sim::world::StaticVisual;
+/// let v = StaticVisual { name: "floor/hall".into(), half_extents: [2.0, 1.0, 0.05], pose: nalgebra::Isometry3::identity(), material: Material::Wood };
+/// assert_eq!(v.material, Material::Wood);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct StaticVisual {
+    /// Name, as building bodies are named (`building/floor/ROOM`).
+    pub name: String,
+    /// Half extents of the box.
+    pub half_extents: [f64; 3],
+    /// World pose of the box centre.
+    pub pose: Isometry3<f64>,
+    /// Its material.
+    pub material: Material,
+}
+
 /// Everything that evolves with the simulation; cloned whole by snapshots.
 ///
 /// The parts that collision views read are shared (`Arc`): a view keeps the picture it was
@@ -55,6 +77,13 @@ pub(crate) struct State {
     pub(crate) models: Vec<ModelEntry>,
     /// Name of every body, indexed by the `user_data` of the body and of its colliders.
     pub(crate) names: Arc<Vec<String>>,
+    /// Visual material of bodies that are not model links (building pieces), indexed like
+    /// `names`.
+    pub(crate) body_materials: Arc<Vec<Option<Material>>>,
+    /// Shapes that are seen but not simulated (floor slabs that coincide with the ground).
+    pub(crate) static_visuals: Arc<Vec<StaticVisual>>,
+    /// Light sources (from the scene), for cameras.
+    pub(crate) lights: Arc<Vec<Light>>,
     pub(crate) ground: Option<RigidBodyHandle>,
     pub(crate) time: f64,
     pub(crate) physics_steps: u64,
@@ -128,6 +157,9 @@ impl World {
                 soft_bodies: SoftBodySet::default(),
                 models: Vec::new(),
                 names: Arc::new(Vec::new()),
+                body_materials: Arc::new(Vec::new()),
+                static_visuals: Arc::new(Vec::new()),
+                lights: Arc::new(Vec::new()),
                 ground: None,
                 time: 0.0,
                 physics_steps: 0,
@@ -193,6 +225,67 @@ impl World {
     pub fn body_name(&self, body: BodyId) -> Option<&str> {
         let rb = self.state.bodies.get(body.0)?;
         self.state.names.get(rb.user_data as usize).map(String::as_str)
+    }
+
+    /// The visual material of a body that is not a model link (building pieces carry the
+    /// material their scene gives them; [`World::set_body_material`] sets one for any other).
+    ///
+    /// ```
+    /// use hearth_sim::assets::Material;
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let b = world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// assert_eq!(world.body_material(b), None);
+    /// world.set_body_material(b, Material::Wood).unwrap();
+    /// assert_eq!(world.body_material(b), Some(Material::Wood));
+    /// ```
+    pub fn body_material(&self, body: BodyId) -> Option<Material> {
+        let rb = self.state.bodies.get(body.0)?;
+        self.state.body_materials.get(rb.user_data as usize).copied().flatten()
+    }
+
+    /// Sets the visual material [`World::body_material`] reports (cameras shade the body with
+    /// it). Model links keep the materials of their URDF visuals.
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownBody`].
+    pub fn set_body_material(&mut self, body: BodyId, material: Material) -> WorldResult<()> {
+        let index = self.rigid_body(body)?.user_data as usize;
+        if let Some(slot) = Arc::make_mut(&mut self.state.body_materials).get_mut(index) {
+            *slot = Some(material);
+        }
+        Ok(())
+    }
+
+    /// Shapes that cameras and LiDARs see but physics does not simulate: floor slabs whose top
+    /// face is the ground plane (the ground already carries them).
+    ///
+    /// ```
+    /// let world = hearth_sim::world::World::new(Default::default()).unwrap();
+    /// assert!(world.static_visuals().is_empty());
+    /// ```
+    pub fn static_visuals(&self) -> &[StaticVisual] {
+        &self.state.static_visuals
+    }
+
+    /// The lights cameras shade with ([`World::load_scene`] sets the scene's).
+    ///
+    /// ```
+    /// let world = hearth_sim::world::World::new(Default::default()).unwrap();
+    /// assert!(world.lights().is_empty());
+    /// ```
+    pub fn lights(&self) -> &[Light] {
+        &self.state.lights
+    }
+
+    /// Replaces the lights.
+    pub fn set_lights(&mut self, lights: Vec<Light>) {
+        self.state.lights = Arc::new(lights);
+    }
+
+    pub(crate) fn add_static_visual(&mut self, visual: StaticVisual) {
+        Arc::make_mut(&mut self.state.static_visuals).push(visual);
     }
 
     /// One control step: `config.substeps` physics steps.
@@ -290,6 +383,7 @@ impl World {
     ) -> RigidBodyHandle {
         let name_index = self.state.names.len() as u128;
         Arc::make_mut(&mut self.state.names).push(name.to_owned());
+        Arc::make_mut(&mut self.state.body_materials).push(None);
         let s = &mut self.state;
         let handle = Arc::make_mut(&mut s.bodies).insert(builder.user_data(name_index));
         for collider in colliders {

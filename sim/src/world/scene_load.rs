@@ -9,7 +9,8 @@ use rapier3d::prelude::*;
 
 use super::control::DiffDriveConfig;
 use super::error::WorldError;
-use super::physics::{BodyId, World};
+use super::physics::{BodyId, StaticVisual, World};
+use crate::assets::Material;
 use super::spawn::{BaseMode, ModelHandle, SpawnOptions, named_configuration};
 use crate::scene::{SceneError, SceneFile};
 
@@ -215,19 +216,24 @@ impl World {
             let has_ground = self.state.ground.is_some();
             for b in scene.building_boxes() {
                 let top = b.center[2] + b.size[2] / 2.0;
-                if has_ground && b.name.starts_with("floor/") && top.abs() < 1e-9 {
-                    // The ground plane already is this floor: a second support at the same
-                    // height makes thin objects (rugs) and what stands on them jitter.
-                    continue;
-                }
                 let pose = Isometry3::from_parts(
                     Translation3::from(b.center),
                     UnitQuaternion::from_euler_angles(0.0, 0.0, b.yaw),
                 );
                 let name = format!("{BUILDING_PREFIX}{}", b.name);
-                loaded
-                    .building
-                    .push(self.add_fixed_box(&name, b.size, &pose, b.material.props().friction));
+                if has_ground && b.name.starts_with("floor/") && top.abs() < 1e-9 {
+                    // The ground plane already is this floor: a second support at the same
+                    // height makes thin objects (rugs) and what stands on them jitter. Cameras
+                    // still see the slab and its material.
+                    self.add_static_visual(StaticVisual {
+                        name,
+                        half_extents: b.size.map(|s| s / 2.0),
+                        pose,
+                        material: b.material,
+                    });
+                    continue;
+                }
+                loaded.building.push(self.add_fixed_box(&name, b.size, &pose, b.material));
             }
             for (object, asset) in scene.objects.iter().zip(&assets) {
                 let model = &asset.model;
@@ -253,6 +259,7 @@ impl World {
                         })?;
                 loaded.objects.insert(object.name.clone(), handle);
             }
+            self.set_lights(scene.lights.clone());
             if let Some((model, pose, options)) = robot {
                 let name = model.name().to_owned();
                 let handle = self
@@ -273,10 +280,13 @@ impl World {
     }
 
     /// A fixed box of full `size` (validated scene data: finite and positive).
-    fn add_fixed_box(&mut self, name: &str, size: [f64; 3], pose: &Isometry3<f64>, friction: f64) -> BodyId {
+    fn add_fixed_box(&mut self, name: &str, size: [f64; 3], pose: &Isometry3<f64>, material: Material) -> BodyId {
         let [hx, hy, hz] = size.map(|s| (s / 2.0).max(1e-4) as Real);
-        let collider = ColliderBuilder::cuboid(hx, hy, hz).friction(friction as Real);
-        BodyId(self.insert_body(name, RigidBodyBuilder::fixed().pose(to_pose(pose)), [collider]))
+        let collider = ColliderBuilder::cuboid(hx, hy, hz).friction(material.props().friction as Real);
+        let body = BodyId(self.insert_body(name, RigidBodyBuilder::fixed().pose(to_pose(pose)), [collider]));
+        // The body was just inserted, so it exists.
+        let _ = self.set_body_material(body, material);
+        body
     }
 
     /// Steps (control steps, [`World::step`]) until every dynamic body has been asleep or
