@@ -19,6 +19,8 @@ pub enum BenchCommand {
     Plan(super::bench_plan::BenchPlanArgs),
     /// Physics steps per second of a settled home, with and without the robot.
     Sim(super::bench_sim::BenchSimArgs),
+    /// LiDAR scans per second in a generated home (1- or 16-beam).
+    Lidar(super::bench_lidar::BenchLidarArgs),
 }
 
 #[derive(Args, Debug)]
@@ -45,6 +47,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Kin(a) => kin(a),
         BenchCommand::Plan(a) => super::bench_plan::run(a),
         BenchCommand::Sim(a) => super::bench_sim::run(a),
+        BenchCommand::Lidar(a) => super::bench_lidar::run(a),
     }
 }
 
