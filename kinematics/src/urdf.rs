@@ -507,13 +507,15 @@ fn build_link(
             Some(m) => (
                 (!m.name.is_empty()).then(|| m.name.clone()),
                 // A visual may refer to a material defined once at the robot level.
-                m.color.as_ref().or_else(|| {
-                    named_materials
-                        .iter()
-                        .find(|n| n.name == m.name)
-                        .and_then(|n| n.color.as_ref())
-                })
-                .map(|c| c.rgba.0),
+                m.color
+                    .as_ref()
+                    .or_else(|| {
+                        named_materials
+                            .iter()
+                            .find(|n| n.name == m.name)
+                            .and_then(|n| n.color.as_ref())
+                    })
+                    .map(|c| c.rgba.0),
             ),
             None => (None, None),
         };

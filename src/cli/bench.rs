@@ -21,6 +21,8 @@ pub enum BenchCommand {
     Sim(super::bench_sim::BenchSimArgs),
     /// LiDAR scans per second in a generated home (1- or 16-beam).
     Lidar(super::bench_lidar::BenchLidarArgs),
+    /// Camera frames per second per modality (iGibson's rendering speed table).
+    Render(super::bench_render::BenchRenderArgs),
 }
 
 #[derive(Args, Debug)]
@@ -48,6 +50,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Plan(a) => super::bench_plan::run(a),
         BenchCommand::Sim(a) => super::bench_sim::run(a),
         BenchCommand::Lidar(a) => super::bench_lidar::run(a),
+        BenchCommand::Render(a) => super::bench_render::run(a),
     }
 }
 

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{ArgGroup, Args, ValueEnum};
-use hearth_sim::scene::{GenerateOptions, RobotPlacement, SceneFile, generate};
+use hearth_sim::scene::{RobotPlacement, SceneFile};
 use hearth_sim::world::{World, WorldConfig};
 use serde_json::json;
 
@@ -122,17 +122,7 @@ fn time_world(scene: &SceneFile, config: &WorldConfig, a: &BenchSimArgs) -> anyh
 
 /// The home to time: the file, or a generated one (with a Fetch placement in its corridor).
 fn bench_scene(a: &BenchSimArgs) -> anyhow::Result<SceneFile> {
-    match (&a.scene, a.generate) {
-        (Some(path), _) => SceneFile::load(path).with_context(|| format!("loading scene `{}`", path.display())),
-        (None, Some(seed)) => generate(&GenerateOptions {
-            seed,
-            rooms: a.rooms,
-            robot: Some("fetch".to_owned()),
-            small_objects: true,
-        })
-        .with_context(|| format!("generating a home (seed {seed}, {} rooms)", a.rooms)),
-        (None, None) => bail!("pass --scene FILE or --generate SEED"),
-    }
+    super::home::load_home(a.scene.as_deref(), a.generate, a.rooms, None)
 }
 
 /// Runs `hearth bench sim`.

@@ -3,9 +3,12 @@
 mod bench;
 mod bench_lidar;
 mod bench_plan;
+mod bench_render;
 mod bench_sim;
 mod demo;
+mod home;
 mod kin;
+mod render;
 mod scene;
 
 use clap::{Parser, Subcommand};
@@ -31,6 +34,9 @@ enum Command {
     /// Scenes: generate homes, summarise scene files, export them as URDF.
     #[command(subcommand)]
     Scene(scene::SceneCommand),
+    /// Render camera modalities (RGB, depth, normals, segmentation, flows, point cloud) from
+    /// a robot in a home and write PNG images and NumPy arrays.
+    Render(render::RenderArgs),
 }
 
 /// Runs one parsed command.
@@ -40,6 +46,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Kin(c) => kin::run(c),
         Command::Bench(c) => bench::run(c),
         Command::Scene(c) => scene::run(c),
+        Command::Render(a) => render::run(a),
     }
 }
 

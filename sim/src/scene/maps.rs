@@ -319,6 +319,71 @@ impl SceneMaps {
         Ok(i)
     }
 
+    /// Calls `f(j, step)` for each traversable 8-neighbour `j` of cell `i` (no corner cutting),
+    /// `step` in cells (1 or √2).
+    fn for_each_neighbour(&self, i: usize, mut f: impl FnMut(usize, f64)) {
+        let w = self.width as i64;
+        let free = |x: i64, y: i64| {
+            x >= 0 && y >= 0 && x < w && y < self.height as i64 && self.traversable[(y * w + x) as usize]
+        };
+        let (x, y) = (i as i64 % w, i as i64 / w);
+        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)] {
+            let (nx, ny) = (x + dx, y + dy);
+            if !free(nx, ny) || (dx != 0 && dy != 0 && !(free(x + dx, y) && free(x, y + dy))) {
+                continue;
+            }
+            let step = if dx != 0 && dy != 0 {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
+            f((ny * w + nx) as usize, step);
+        }
+    }
+
+    /// Geodesic distance (metres, along 8-connected traversable cells) from every cell to
+    /// `goal`; `f64::INFINITY` where unreachable. One Dijkstra sweep, so per-step distance
+    /// lookups afterwards are O(1) ([`SceneMaps::geodesic_at`]).
+    ///
+    /// # Errors
+    /// [`SceneError::OffMap`] / [`SceneError::Blocked`] / [`SceneError::NonFinite`] for a bad goal.
+    ///
+    /// ```
+    /// use hearth_sim::scene::{GenerateOptions, MapOptions, SceneMaps, generate};
+    /// let home = generate(&GenerateOptions { seed: 2, rooms: 2, ..Default::default() }).unwrap();
+    /// let maps = SceneMaps::build(&home, &MapOptions::default()).unwrap();
+    /// let goal = home.building.rooms[0].center();
+    /// let field = maps.distance_field(goal).unwrap();
+    /// assert!(maps.geodesic_at(&field, goal).unwrap() < 0.1);
+    /// ```
+    pub fn distance_field(&self, goal: [f64; 2]) -> Result<Vec<f64>, SceneError> {
+        let g = self.endpoint(goal, "goal")?;
+        let mut dist = vec![f64::INFINITY; self.traversable.len()];
+        let mut open = BinaryHeap::new();
+        dist[g] = 0.0;
+        open.push(Reverse((0f64.to_bits(), g)));
+        while let Some(Reverse((bits, i))) = open.pop() {
+            if f64::from_bits(bits) > dist[i] {
+                continue;
+            }
+            self.for_each_neighbour(i, |j, step| {
+                let c = dist[i] + step * self.resolution;
+                if c < dist[j] {
+                    dist[j] = c;
+                    open.push(Reverse((c.to_bits(), j)));
+                }
+            });
+        }
+        Ok(dist)
+    }
+
+    /// The distance a [`SceneMaps::distance_field`] gives at world point `p` (its cell's),
+    /// `None` off the map.
+    pub fn geodesic_at(&self, field: &[f64], p: [f64; 2]) -> Option<f64> {
+        let (x, y) = self.cell_of(p)?;
+        field.get(y * self.width + x).copied()
+    }
+
     /// Shortest 8-connected path (no corner cutting) between two points, as world waypoints
     /// from `start` to `goal` with collinear cells merged.
     ///
@@ -344,32 +409,18 @@ impl SceneMaps {
         cost[s] = 0.0;
         // Costs are non-negative, so their bit patterns order like the numbers.
         open.push(Reverse((heuristic(s).to_bits(), s)));
-        let free = |x: i64, y: i64| {
-            x >= 0 && y >= 0 && x < w && y < self.height as i64 && self.traversable[(y * w + x) as usize]
-        };
         while let Some(Reverse((_, i))) = open.pop() {
             if i == g {
                 break;
             }
-            let (x, y) = (i as i64 % w, i as i64 / w);
-            for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)] {
-                let (nx, ny) = (x + dx, y + dy);
-                if !free(nx, ny) || (dx != 0 && dy != 0 && !(free(x + dx, y) && free(x, y + dy))) {
-                    continue;
-                }
-                let j = (ny * w + nx) as usize;
-                let step = if dx != 0 && dy != 0 {
-                    std::f64::consts::SQRT_2
-                } else {
-                    1.0
-                };
+            self.for_each_neighbour(i, |j, step| {
                 let c = cost[i] + step;
                 if c < cost[j] {
                     cost[j] = c;
                     parent[j] = i;
                     open.push(Reverse(((c + heuristic(j)).to_bits(), j)));
                 }
-            }
+            });
         }
         if !cost[g].is_finite() {
             return Err(SceneError::NoPath { from: start, to: goal });

@@ -83,7 +83,13 @@ impl CameraIntrinsics {
         }
         check_param("vfov_deg", self.vfov_deg, 1.0, 170.0, "must be in [1, 170] degrees")?;
         check_param("near", self.near, 1e-4, 1e4, "must be in [1e-4, 1e4] m")?;
-        check_param("far", self.far, self.near * 1.0001, 1e6, "must exceed near and be at most 1e6 m")?;
+        check_param(
+            "far",
+            self.far,
+            self.near * 1.0001,
+            1e6,
+            "must exceed near and be at most 1e6 m",
+        )?;
         Ok(())
     }
 
@@ -463,7 +469,8 @@ impl Frame {
         let fit = |on: bool, len: usize| if on { len } else { 0 };
         self.rgb.resize(fit(modalities.contains(Modality::Rgb), 3 * n), 0);
         self.depth.resize(fit(modalities.contains(Modality::Depth), n), 0.0);
-        self.normal.resize(fit(modalities.contains(Modality::Normal), n), [0.0; 3]);
+        self.normal
+            .resize(fit(modalities.contains(Modality::Normal), n), [0.0; 3]);
         self.seg.resize(fit(modalities.contains(Modality::Seg), n), 0);
         self.ins_seg.resize(fit(modalities.contains(Modality::InsSeg), n), 0);
         self.optical_flow

@@ -10,13 +10,19 @@
 //!   and the LiDARs share.
 
 pub mod camera;
+mod cameras;
 mod error;
+pub mod gpu;
 pub mod raycast;
+pub mod save;
+pub mod shading;
 mod visuals;
 
 pub use camera::{Backend, CameraIntrinsics, Frame, Modality, ModalitySet, Mount, Preset, RenderOptions};
+pub use cameras::{Camera, CameraConfig};
 pub use error::{SensorError, SensorResult};
-pub use raycast::{RayHit, RayScene};
+pub use gpu::{GpuCamera, gpu_adapter};
+pub use raycast::{RayHit, RayScene, RaycastCamera};
 pub use visuals::{
     Instance, PbrMaterial, SceneLight, SemanticClass, VisualItem, VisualScene, VisualShape, default_lights,
     metallic_roughness, pose_f32, scene_lights,

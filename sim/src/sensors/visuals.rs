@@ -464,7 +464,9 @@ impl VisualScene {
                     let body_pose = match cached {
                         Some((ch, p)) if ch == h => p,
                         _ => {
-                            let p = bodies.get(h).map_or(Isometry3::identity(), |rb| from_pose(rb.position()));
+                            let p = bodies
+                                .get(h)
+                                .map_or(Isometry3::identity(), |rb| from_pose(rb.position()));
                             cached = Some((h, p));
                             p
                         }

@@ -7,10 +7,10 @@ use hearth_kinematics::{from_pose, to_pose};
 use rapier3d::prelude::*;
 
 use super::config::WorldConfig;
-use crate::assets::Material;
-use crate::scene::Light;
 use super::error::{WorldError, WorldResult, check_finite};
 use super::spawn::ModelEntry;
+use crate::assets::Material;
+use crate::scene::Light;
 
 /// A rigid body in the world (a robot link group, an object, the ground).
 ///

@@ -10,8 +10,8 @@ use rapier3d::prelude::*;
 use super::control::DiffDriveConfig;
 use super::error::WorldError;
 use super::physics::{BodyId, StaticVisual, World};
-use crate::assets::Material;
 use super::spawn::{BaseMode, ModelHandle, SpawnOptions, named_configuration};
+use crate::assets::Material;
 use crate::scene::{SceneError, SceneFile};
 
 /// Name prefix of the building's bodies in the world (`building/floor/…`, `building/wall/…`).
@@ -233,7 +233,9 @@ impl World {
                     });
                     continue;
                 }
-                loaded.building.push(self.add_fixed_box(&name, b.size, &pose, b.material));
+                loaded
+                    .building
+                    .push(self.add_fixed_box(&name, b.size, &pose, b.material));
             }
             for (object, asset) in scene.objects.iter().zip(&assets) {
                 let model = &asset.model;

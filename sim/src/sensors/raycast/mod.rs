@@ -7,16 +7,19 @@
 //! costs a few microseconds per update, not a full rebuild. Casts take `&self` and run in
 //! parallel.
 
-use parry3d::bounding_volume::Aabb;
-use parry3d::math::{Pose, Real, Vector};
-use parry3d::partitioning::{Bvh, BvhBuildStrategy};
-use parry3d::query::Ray;
-use parry3d::shape::{Ball, Capsule, Cuboid, Cylinder, SharedShape, TriMesh};
+use parry3d::math::{Matrix, Pose, Real, Vector};
+use parry3d::query::{Ray, RayCast};
+use parry3d::shape::{Capsule, TriMesh};
 
 use super::visuals::{VisualScene, VisualShape};
 use crate::world::World;
+use bvh::{Bounds, FlatBvh};
 use hearth_kinematics::to_pose;
 
+mod bvh;
+mod camera;
+
+pub use camera::RaycastCamera;
 
 /// A ray's first hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +30,152 @@ pub struct RayHit {
     pub normal: Vector,
     /// Index of the item hit (into [`VisualScene::items`]).
     pub item: u32,
+}
+
+/// A shape in its item's frame, in the form the ray tests want.
+#[derive(Clone, Debug)]
+enum Prim {
+    Box {
+        half: Vector,
+    },
+    Sphere {
+        radius: f32,
+    },
+    /// Along z.
+    Cylinder {
+        radius: f32,
+        half_length: f32,
+    },
+    /// Along z.
+    Capsule(Capsule),
+    Mesh(Box<TriMesh>),
+    /// Seen as nothing (a mesh without triangles).
+    Empty,
+}
+
+impl Prim {
+    fn of(shape: &VisualShape) -> Self {
+        match shape {
+            VisualShape::Box { half } => Prim::Box {
+                half: Vector::from(*half),
+            },
+            VisualShape::Sphere { radius } => Prim::Sphere { radius: *radius },
+            VisualShape::Cylinder { radius, half_length } => Prim::Cylinder {
+                radius: *radius,
+                half_length: *half_length,
+            },
+            VisualShape::Capsule { radius, half_length } => Prim::Capsule(Capsule::new_z(*half_length, *radius)),
+            VisualShape::Mesh(mesh) => {
+                let vertices: Vec<Vector> = mesh.vertices.iter().map(|v| Vector::from(*v)).collect();
+                match TriMesh::new(vertices, mesh.triangles.clone()) {
+                    Ok(t) => Prim::Mesh(Box::new(t)),
+                    Err(_) => Prim::Empty,
+                }
+            }
+        }
+    }
+
+    /// Bounding box in the item frame.
+    fn local_bounds(&self) -> Bounds {
+        let half = match self {
+            Prim::Box { half } => *half,
+            Prim::Sphere { radius } => Vector::splat(*radius),
+            Prim::Cylinder { radius, half_length } => Vector::new(*radius, *radius, *half_length),
+            Prim::Capsule(c) => Vector::new(c.radius, c.radius, c.half_height() + c.radius),
+            Prim::Mesh(m) => {
+                let aabb = m.local_aabb();
+                return Bounds {
+                    min: aabb.mins,
+                    max: aabb.maxs,
+                };
+            }
+            Prim::Empty => Vector::ZERO,
+        };
+        Bounds { min: -half, max: half }
+    }
+
+    /// Entry hit of a local ray (`o`, unit `d`) before `limit`: distance and local outward
+    /// normal. Rays starting inside the shape see nothing of it.
+    #[inline]
+    fn cast(&self, o: Vector, d: Vector, limit: f32) -> Option<(f32, Vector)> {
+        match self {
+            Prim::Box { half } => {
+                let inv = Vector::ONE / d;
+                let t1 = (-*half - o) * inv;
+                let t2 = (*half - o) * inv;
+                let tmin = t1.min(t2);
+                let tmax = t1.max(t2);
+                let near = tmin.max_element();
+                let far = tmax.min_element();
+                if near > far || near <= 0.0 || near >= limit {
+                    return None;
+                }
+                let axis = if near == tmin.x {
+                    0
+                } else if near == tmin.y {
+                    1
+                } else {
+                    2
+                };
+                let mut n = Vector::ZERO;
+                n[axis] = -d[axis].signum();
+                Some((near, n))
+            }
+            Prim::Sphere { radius } => {
+                let b = o.dot(d);
+                let c = o.length_squared() - radius * radius;
+                if c <= 0.0 {
+                    return None;
+                }
+                let disc = b * b - c;
+                if disc < 0.0 {
+                    return None;
+                }
+                let t = -b - disc.sqrt();
+                (t > 0.0 && t < limit).then(|| (t, (o + d * t) / *radius))
+            }
+            Prim::Cylinder { radius, half_length } => {
+                let (r, h) = (*radius, *half_length);
+                let r2 = r * r;
+                if o.z.abs() <= h && o.x * o.x + o.y * o.y <= r2 {
+                    return None;
+                }
+                let mut best: Option<(f32, Vector)> = None;
+                let a = d.x * d.x + d.y * d.y;
+                if a > 1e-12 {
+                    let b = o.x * d.x + o.y * d.y;
+                    let c = o.x * o.x + o.y * o.y - r2;
+                    let disc = b * b - a * c;
+                    if disc >= 0.0 {
+                        let t = (-b - disc.sqrt()) / a;
+                        let z = o.z + d.z * t;
+                        if t > 0.0 && t < limit && z.abs() <= h {
+                            let p = o + d * t;
+                            best = Some((t, Vector::new(p.x / r, p.y / r, 0.0)));
+                        }
+                    }
+                }
+                if d.z.abs() > 1e-12 {
+                    let cap = if d.z > 0.0 { -h } else { h };
+                    let t = (cap - o.z) / d.z;
+                    let p = o + d * t;
+                    if t > 0.0 && t < best.map_or(limit, |b| b.0) && p.x * p.x + p.y * p.y <= r2 {
+                        best = Some((t, Vector::new(0.0, 0.0, cap.signum())));
+                    }
+                }
+                best
+            }
+            Prim::Capsule(c) => local_parry(c, o, d, limit),
+            Prim::Mesh(m) => local_parry(m.as_ref(), o, d, limit),
+            Prim::Empty => None,
+        }
+    }
+}
+
+/// Entry hit through parry's local ray cast, culling hits from inside and back faces.
+fn local_parry(shape: &impl RayCast, o: Vector, d: Vector, limit: f32) -> Option<(f32, Vector)> {
+    let hit = shape.cast_local_ray_and_get_normal(&Ray::new(o, d), limit, false)?;
+    (hit.time_of_impact > 0.0 && hit.normal.dot(d) < 0.0).then_some((hit.time_of_impact, hit.normal))
 }
 
 /// The visual shapes of a world, posed, in BVHs for ray casting.
@@ -46,17 +195,19 @@ pub struct RayHit {
 /// assert!((hit.normal.x + 1.0).abs() < 1e-4);
 /// ```
 pub struct RayScene {
-    /// Per item: its parry shape and the shape's pose in the item frame.
-    shapes: Vec<(SharedShape, Pose)>,
-    /// Per item: world pose of the shape now.
+    prims: Vec<Prim>,
+    /// Per item: world pose now.
     poses: Vec<Pose>,
-    /// Per item: world pose of the shape at the previous update.
+    /// Per item: world-to-item rotation matrix and the item's world position.
+    to_local: Vec<(Matrix, Vector)>,
+    /// Per item: world bounding box now.
+    bounds: Vec<Bounds>,
+    /// Per item: world pose at the previous update.
     prev_poses: Vec<Pose>,
     /// Per item: whether it is in the movers' BVH.
     moving: Vec<bool>,
-    rest: Bvh,
-    rest_items: Vec<u32>,
-    movers: Bvh,
+    rest: FlatBvh,
+    movers: FlatBvh,
     mover_items: Vec<u32>,
     /// Reused buffer of item poses.
     item_poses: Vec<nalgebra::Isometry3<f64>>,
@@ -66,51 +217,36 @@ pub struct RayScene {
 impl std::fmt::Debug for RayScene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("RayScene")
-            .field("items", &self.shapes.len())
+            .field("items", &self.prims.len())
             .field("movers", &self.mover_items.len())
             .finish_non_exhaustive()
     }
 }
 
-fn parry_shape(shape: &VisualShape) -> (SharedShape, Pose) {
-    // parry's cylinders and capsules run along y; visuals along z: turn y onto z.
-    let y_to_z = Pose::rotation(Vector::new(std::f32::consts::FRAC_PI_2, 0.0, 0.0));
-    match shape {
-        VisualShape::Box { half } => (
-            SharedShape::new(Cuboid::new(Vector::new(half[0], half[1], half[2]))),
-            Pose::IDENTITY,
-        ),
-        VisualShape::Sphere { radius } => (SharedShape::new(Ball::new(*radius)), Pose::IDENTITY),
-        VisualShape::Cylinder { radius, half_length } => {
-            (SharedShape::new(Cylinder::new(*half_length, *radius)), y_to_z)
-        }
-        VisualShape::Capsule { radius, half_length } => {
-            (SharedShape::new(Capsule::new_z(*half_length, *radius)), Pose::IDENTITY)
-        }
-        VisualShape::Mesh(mesh) => {
-            let vertices: Vec<Vector> = mesh.vertices.iter().map(|v| Vector::new(v[0], v[1], v[2])).collect();
-            match TriMesh::new(vertices, mesh.triangles.clone()) {
-                Ok(t) => (SharedShape::new(t), Pose::IDENTITY),
-                // A degenerate mesh (no triangles) is seen as nothing: a zero-size ball.
-                Err(_) => (SharedShape::new(Ball::new(0.0)), Pose::IDENTITY),
-            }
-        }
-    }
+/// World bounding box of a local box under `pose`.
+fn world_bounds(local: &Bounds, pose: &Pose) -> Bounds {
+    let c = pose.transform_point((local.min + local.max) * 0.5);
+    let h = (local.max - local.min) * 0.5;
+    let m = Matrix::from_quat(pose.rotation);
+    let abs = Matrix::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let e = abs * h;
+    Bounds { min: c - e, max: c + e }
 }
 
 impl RayScene {
     /// Shapes for every item of `scene` (call [`RayScene::update`] before casting).
     pub fn new(scene: &VisualScene) -> Self {
-        let shapes: Vec<(SharedShape, Pose)> = scene.items.iter().map(|i| parry_shape(&i.shape)).collect();
-        let n = shapes.len();
+        let prims: Vec<Prim> = scene.items.iter().map(|i| Prim::of(&i.shape)).collect();
+        let n = prims.len();
         Self {
-            shapes,
+            prims,
             poses: vec![Pose::IDENTITY; n],
+            to_local: vec![(Matrix::IDENTITY, Vector::ZERO); n],
+            bounds: vec![Bounds::EMPTY; n],
             prev_poses: vec![Pose::IDENTITY; n],
             moving: vec![false; n],
-            rest: Bvh::new(),
-            rest_items: Vec::new(),
-            movers: Bvh::new(),
+            rest: FlatBvh::default(),
+            movers: FlatBvh::default(),
             mover_items: Vec::new(),
             item_poses: Vec::with_capacity(n),
             updates: 0,
@@ -119,12 +255,12 @@ impl RayScene {
 
     /// Number of shapes.
     pub fn len(&self) -> usize {
-        self.shapes.len()
+        self.prims.len()
     }
 
     /// Whether the scene has no shapes.
     pub fn is_empty(&self) -> bool {
-        self.shapes.is_empty()
+        self.prims.is_empty()
     }
 
     /// Reads every shape's pose from `world` (the previous poses are kept for flow) and brings
@@ -142,8 +278,12 @@ impl RayScene {
         self.updates += 1;
         std::mem::swap(&mut self.poses, &mut self.prev_poses);
         let mut new_mover = false;
-        for (i, p) in item_poses.iter().enumerate().take(self.shapes.len()) {
-            let pose = to_pose(p) * self.shapes[i].1;
+        for (i, p) in item_poses.iter().enumerate().take(self.prims.len()) {
+            let pose = to_pose(p);
+            if first || pose != self.prev_poses[i] {
+                self.bounds[i] = world_bounds(&self.prims[i].local_bounds(), &pose);
+                self.to_local[i] = (Matrix::from_quat(pose.rotation).transpose(), pose.translation);
+            }
             self.poses[i] = pose;
             if first {
                 self.prev_poses[i] = pose;
@@ -153,22 +293,15 @@ impl RayScene {
             }
         }
         if first || new_mover {
-            self.rest_items = (0..self.shapes.len() as u32).filter(|&i| !self.moving[i as usize]).collect();
-            self.mover_items = (0..self.shapes.len() as u32).filter(|&i| self.moving[i as usize]).collect();
-            self.rest = self.build(&self.rest_items);
+            let rest: Vec<u32> = (0..self.prims.len() as u32)
+                .filter(|&i| !self.moving[i as usize])
+                .collect();
+            self.mover_items = (0..self.prims.len() as u32)
+                .filter(|&i| self.moving[i as usize])
+                .collect();
+            self.rest = FlatBvh::build(&rest, &self.bounds);
         }
-        self.movers = self.build(&self.mover_items);
-    }
-
-    fn build(&self, items: &[u32]) -> Bvh {
-        let aabbs: Vec<Aabb> = items
-            .iter()
-            .map(|&i| {
-                let (shape, _) = &self.shapes[i as usize];
-                shape.compute_aabb(&self.poses[i as usize])
-            })
-            .collect();
-        Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs)
+        self.movers = FlatBvh::build(&self.mover_items, &self.bounds);
     }
 
     /// World pose of item `item`'s shape now.
@@ -184,35 +317,28 @@ impl RayScene {
     /// First hit of the ray from `origin` along the unit vector `dir` within `max_toi`.
     /// Shapes that contain the origin are not seen (as back faces are culled by a rasteriser).
     pub fn cast(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<RayHit> {
-        let ray = Ray::new(origin, dir);
-        let mut best: Option<RayHit> = None;
-        for (bvh, items) in [(&self.rest, &self.rest_items), (&self.movers, &self.mover_items)] {
-            if items.is_empty() {
-                continue;
-            }
-            let limit = best.map_or(max_toi, |b| b.toi);
-            let found = std::cell::Cell::new(None::<RayHit>);
-            let hit = bvh.cast_ray(&ray, limit, |leaf, best_so_far| {
-                let item = items[leaf as usize];
-                let (shape, _) = &self.shapes[item as usize];
-                let hit = shape.cast_ray_and_get_normal(&self.poses[item as usize], &ray, best_so_far, true)?;
-                if hit.time_of_impact <= 0.0 {
-                    return None;
-                }
-                let n = if hit.normal.dot(dir) > 0.0 { -hit.normal } else { hit.normal };
-                found.set(Some(RayHit {
-                    toi: hit.time_of_impact,
-                    normal: n,
-                    item,
-                }));
-                Some(hit.time_of_impact)
+        let inv = Vector::ONE / dir;
+        let mut best: Option<(f32, u32)> = None;
+        for bvh in [&self.rest, &self.movers] {
+            let limit = best.map_or(max_toi, |b| b.0);
+            let hit = bvh.cast(origin, inv, limit, |item, best_so_far| {
+                let (r, t) = &self.to_local[item as usize];
+                let o = *r * (origin - *t);
+                let d = *r * dir;
+                self.prims[item as usize].cast(o, d, best_so_far).map(|(toi, _)| toi)
             });
-            // Each accepted leaf hit is no farther than the best before it, so the last one
-            // recorded is the closest.
-            if hit.is_some() && found.get().is_some() {
-                best = found.get();
+            if hit.is_some() {
+                best = hit;
             }
         }
-        best
+        // The normal of the winning item only (one more primitive test per ray).
+        let (toi, item) = best?;
+        let (r, t) = &self.to_local[item as usize];
+        let (_, n) = self.prims[item as usize].cast(*r * (origin - *t), *r * dir, toi * 1.0001 + 1e-6)?;
+        Some(RayHit {
+            toi,
+            normal: r.transpose() * n,
+            item,
+        })
     }
 }

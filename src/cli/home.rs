@@ -1,0 +1,31 @@
+//! The home a command works in: a scene file, or a generated home.
+
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use hearth_sim::scene::{GenerateOptions, SceneFile, generate};
+
+/// Loads `scene`, or generates a home with `seed` and `rooms` placing `robot` in its corridor.
+/// A loaded scene's robot is replaced by `robot` when one is named and the scene places one.
+pub(crate) fn load_home(
+    scene: Option<&Path>,
+    seed: Option<u64>,
+    rooms: usize,
+    robot: Option<&str>,
+) -> anyhow::Result<SceneFile> {
+    let mut home = match (scene, seed) {
+        (Some(path), _) => SceneFile::load(path).with_context(|| format!("loading scene `{}`", path.display()))?,
+        (None, Some(seed)) => generate(&GenerateOptions {
+            seed,
+            rooms,
+            robot: Some(robot.unwrap_or("fetch").to_owned()),
+            small_objects: true,
+        })
+        .with_context(|| format!("generating a home (seed {seed}, {rooms} rooms)"))?,
+        (None, None) => bail!("pass --scene FILE or --generate SEED"),
+    };
+    if let (Some(name), Some(placement)) = (robot, home.robot.as_mut()) {
+        placement.name = name.to_owned();
+    }
+    Ok(home)
+}
