@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 pub mod assets;
+pub mod env;
 pub mod scene;
 pub mod sensors;
 pub mod world;

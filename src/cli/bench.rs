@@ -23,6 +23,8 @@ pub enum BenchCommand {
     Lidar(super::bench_lidar::BenchLidarArgs),
     /// Camera frames per second per modality (iGibson's rendering speed table).
     Render(super::bench_render::BenchRenderArgs),
+    /// Env steps per second (one env, and N envs together) and memory per env.
+    Env(super::bench_env::BenchEnvArgs),
 }
 
 #[derive(Args, Debug)]
@@ -51,6 +53,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Sim(a) => super::bench_sim::run(a),
         BenchCommand::Lidar(a) => super::bench_lidar::run(a),
         BenchCommand::Render(a) => super::bench_render::run(a),
+        BenchCommand::Env(a) => super::bench_env::run(a),
     }
 }
 

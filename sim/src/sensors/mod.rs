@@ -8,11 +8,17 @@
 //!   ([`SemanticClass`]) and instance id.
 //! - [`RayScene`] is the ray-casting engine (parry shapes in a BVH) that the ray-cast camera
 //!   and the LiDARs share.
+//! - [`LidarSpec`], [`LidarNoise`], [`Lidar`] and the output [`Scan`] describe a LiDAR; the
+//!   [`lidar`] module documents frames, angles and units.
+//! - [`OccupancyGrid`] is a robot-centred local map built from a planar scan; the
+//!   [`occupancy`] module documents its layout and values.
 
 pub mod camera;
 mod cameras;
 mod error;
 pub mod gpu;
+pub mod lidar;
+pub mod occupancy;
 pub mod raycast;
 pub mod save;
 pub mod shading;
@@ -22,6 +28,11 @@ pub use camera::{Backend, CameraIntrinsics, Frame, Modality, ModalitySet, Mount,
 pub use cameras::{Camera, CameraConfig};
 pub use error::{SensorError, SensorResult};
 pub use gpu::{GpuCamera, gpu_adapter};
+pub use lidar::{
+    CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, MAX_LIDAR_BEAMS, MAX_LIDAR_RAYS, NO_ITEM, Scan, lidar_pose,
+    lidar_pose_in_base, model_items,
+};
+pub use occupancy::{FREE, MAX_GRID_SIDE, OCCUPIED, OccupancyGrid, OccupancyGridSpec, UNKNOWN};
 pub use raycast::{RayHit, RayScene, RaycastCamera};
 pub use visuals::{
     Instance, PbrMaterial, SceneLight, SemanticClass, VisualItem, VisualScene, VisualShape, default_lights,

@@ -1,0 +1,515 @@
+//! [`EnvConfig`]: the TOML file that builds an environment. Unknown keys and bad values are
+//! errors that name the key.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{EnvError, EnvResult};
+
+/// Where the home comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneConfig {
+    /// Generate a home with this seed (used when `file` is absent).
+    #[serde(default = "default_generate")]
+    pub generate: u64,
+    /// A scene file (JSON) instead of a generated home.
+    #[serde(default)]
+    pub file: Option<PathBuf>,
+    /// Rooms of a generated home besides the corridor (2 to 12).
+    #[serde(default = "default_rooms")]
+    pub rooms: usize,
+    /// Whether a generated home has small objects (books, mugs, …) on its surfaces.
+    #[serde(default = "yes")]
+    pub small_objects: bool,
+}
+
+fn default_generate() -> u64 {
+    1
+}
+fn default_rooms() -> usize {
+    3
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for SceneConfig {
+    fn default() -> Self {
+        Self {
+            generate: default_generate(),
+            file: None,
+            rooms: default_rooms(),
+            small_objects: true,
+        }
+    }
+}
+
+/// The robot and its base controller.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotConfig {
+    /// Built-in wheeled robot: `turtlebot`, `locobot` or `fetch`.
+    #[serde(default = "default_robot")]
+    pub name: String,
+    /// Linear speed (m/s) an action of +1 commands.
+    #[serde(default = "default_linear")]
+    pub max_linear_speed: f64,
+    /// Angular speed (rad/s) an action of +1 commands.
+    #[serde(default = "default_angular")]
+    pub max_angular_speed: f64,
+}
+
+fn default_robot() -> String {
+    "turtlebot".into()
+}
+fn default_linear() -> f64 {
+    0.5
+}
+fn default_angular() -> f64 {
+    1.5
+}
+
+impl Default for RobotConfig {
+    fn default() -> Self {
+        Self {
+            name: default_robot(),
+            max_linear_speed: default_linear(),
+            max_angular_speed: default_angular(),
+        }
+    }
+}
+
+/// The task and its reward.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskConfig {
+    /// `point_nav_fixed` or `point_nav_random`.
+    pub name: String,
+    /// Fixed start (x, y, yaw) for `point_nav_fixed`.
+    #[serde(default)]
+    pub start: Option<[f64; 3]>,
+    /// Fixed goal (x, y) for `point_nav_fixed`.
+    #[serde(default)]
+    pub goal: Option<[f64; 2]>,
+    /// Success when the base is this close to the goal (m; iGibson: 0.36).
+    #[serde(default = "default_tolerance")]
+    pub goal_tolerance: f64,
+    /// Geodesic start–goal distance range (m) for `point_nav_random`.
+    #[serde(default = "default_geodesic_range")]
+    pub geodesic_range: [f64; 2],
+    /// Potential the shaping reward follows: `geodesic` or `l2`.
+    #[serde(default = "default_potential")]
+    pub potential: String,
+    /// Weight of the potential reward (per metre of progress).
+    #[serde(default = "one")]
+    pub potential_weight: f64,
+    /// Penalty per step with a collision (subtracted).
+    #[serde(default = "default_collision_penalty")]
+    pub collision_penalty: f64,
+    /// Reward on success.
+    #[serde(default = "default_success")]
+    pub success_reward: f64,
+    /// Terminate after this many collision steps (0: never).
+    #[serde(default)]
+    pub max_collisions: u32,
+}
+
+fn default_tolerance() -> f64 {
+    0.36
+}
+fn default_geodesic_range() -> [f64; 2] {
+    [1.0, 10.0]
+}
+fn default_potential() -> String {
+    "geodesic".into()
+}
+fn one() -> f64 {
+    1.0
+}
+fn default_collision_penalty() -> f64 {
+    0.1
+}
+fn default_success() -> f64 {
+    10.0
+}
+
+/// Camera settings for the `rgb`, `depth`, … observations.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSection {
+    /// Image width.
+    #[serde(default = "default_side")]
+    pub width: u32,
+    /// Image height.
+    #[serde(default = "default_side")]
+    pub height: u32,
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_vfov")]
+    pub vfov: f64,
+    /// Near clipping (m).
+    #[serde(default = "default_near")]
+    pub near: f64,
+    /// Far clipping (m); depth beyond reads 0.
+    #[serde(default = "default_far")]
+    pub far: f64,
+    /// `auto`, `wgpu` or `raycast`.
+    #[serde(default = "default_backend")]
+    pub backend: String,
+}
+
+fn default_side() -> u32 {
+    128
+}
+fn default_vfov() -> f64 {
+    90.0
+}
+fn default_near() -> f64 {
+    0.05
+}
+fn default_far() -> f64 {
+    5.0
+}
+fn default_backend() -> String {
+    "auto".into()
+}
+
+impl Default for CameraSection {
+    fn default() -> Self {
+        Self {
+            width: default_side(),
+            height: default_side(),
+            vfov: default_vfov(),
+            near: default_near(),
+            far: default_far(),
+            backend: default_backend(),
+        }
+    }
+}
+
+/// LiDAR settings for `scan`, `scan_16` and `occupancy_grid`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LidarSection {
+    /// Planar model for `scan`: `hokuyo` (URG-04LX) or `sick` (TIM571).
+    #[serde(default = "default_lidar")]
+    pub model: String,
+    /// Horizontal resolution of the 16-beam `scan_16`, degrees.
+    #[serde(default = "default_vlp_resolution")]
+    pub vlp16_resolution_deg: f64,
+    /// Probability a ray returns nothing.
+    #[serde(default)]
+    pub dropout: f64,
+    /// Gaussian range noise, m.
+    #[serde(default)]
+    pub noise_std: f64,
+    /// Occupancy grid cells per side.
+    #[serde(default = "default_grid")]
+    pub grid_size: usize,
+    /// Occupancy grid cell size, m.
+    #[serde(default = "default_grid_resolution")]
+    pub grid_resolution: f64,
+}
+
+fn default_lidar() -> String {
+    "hokuyo".into()
+}
+fn default_vlp_resolution() -> f64 {
+    2.0
+}
+fn default_grid() -> usize {
+    128
+}
+fn default_grid_resolution() -> f64 {
+    5.0 / 128.0
+}
+
+impl Default for LidarSection {
+    fn default() -> Self {
+        Self {
+            model: default_lidar(),
+            vlp16_resolution_deg: default_vlp_resolution(),
+            dropout: 0.0,
+            noise_std: 0.0,
+            grid_size: default_grid(),
+            grid_resolution: default_grid_resolution(),
+        }
+    }
+}
+
+/// Which observations and their sensors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorsConfig {
+    /// Observation names: `rgb`, `depth`, `normal`, `seg`, `ins_seg`, `optical_flow`,
+    /// `scene_flow`, `pc`, `scan`, `scan_16`, `occupancy_grid`, `task_obs`,
+    /// `proprioception`, `bump`.
+    #[serde(default = "default_modalities")]
+    pub modalities: Vec<String>,
+    /// Camera settings.
+    #[serde(default)]
+    pub camera: CameraSection,
+    /// LiDAR settings.
+    #[serde(default)]
+    pub lidar: LidarSection,
+}
+
+fn default_modalities() -> Vec<String> {
+    vec!["task_obs".into(), "scan".into()]
+}
+
+impl Default for SensorsConfig {
+    fn default() -> Self {
+        Self {
+            modalities: default_modalities(),
+            camera: CameraSection::default(),
+            lidar: LidarSection::default(),
+        }
+    }
+}
+
+/// Physics and control rates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhysicsConfig {
+    /// Physics step, s.
+    #[serde(default = "default_timestep")]
+    pub timestep: f64,
+    /// Physics steps per action (4 at 1/120 s = 30 Hz control, as iGibson).
+    #[serde(default = "default_substeps")]
+    pub substeps: u32,
+    /// Let resting bodies sleep (much faster; off for bit-exact comparisons with PyBullet).
+    #[serde(default = "yes")]
+    pub sleeping: bool,
+}
+
+fn default_timestep() -> f64 {
+    1.0 / 120.0
+}
+fn default_substeps() -> u32 {
+    4
+}
+
+impl Default for PhysicsConfig {
+    fn default() -> Self {
+        Self {
+            timestep: default_timestep(),
+            substeps: default_substeps(),
+            sleeping: true,
+        }
+    }
+}
+
+/// Episode limits.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EpisodeConfig {
+    /// Steps before an episode is truncated.
+    #[serde(default = "default_max_steps")]
+    pub max_steps: u32,
+}
+
+fn default_max_steps() -> u32 {
+    500
+}
+
+impl Default for EpisodeConfig {
+    fn default() -> Self {
+        Self {
+            max_steps: default_max_steps(),
+        }
+    }
+}
+
+/// A whole environment configuration (see `examples/configs/`).
+///
+/// ```
+/// use hearth_sim::env::EnvConfig;
+/// let c = EnvConfig::from_toml("[task]\nname = \"point_nav_random\"\n").unwrap();
+/// assert_eq!(c.robot.name, "turtlebot");
+/// let err = EnvConfig::from_toml("[task]\nname = \"point_nav_random\"\nspeed = 3\n").unwrap_err();
+/// assert!(err.to_string().contains("speed"), "{err}");
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvConfig {
+    /// The home.
+    #[serde(default)]
+    pub scene: SceneConfig,
+    /// The robot.
+    #[serde(default)]
+    pub robot: RobotConfig,
+    /// The task.
+    pub task: TaskConfig,
+    /// Observations.
+    #[serde(default)]
+    pub sensors: SensorsConfig,
+    /// Physics.
+    #[serde(default)]
+    pub physics: PhysicsConfig,
+    /// Episodes.
+    #[serde(default)]
+    pub episode: EpisodeConfig,
+}
+
+/// Observation names an env can produce.
+pub const OBSERVATION_NAMES: [&str; 14] = [
+    "rgb",
+    "depth",
+    "normal",
+    "seg",
+    "ins_seg",
+    "optical_flow",
+    "scene_flow",
+    "pc",
+    "scan",
+    "scan_16",
+    "occupancy_grid",
+    "task_obs",
+    "proprioception",
+    "bump",
+];
+
+/// Task names.
+pub const TASK_NAMES: [&str; 2] = ["point_nav_fixed", "point_nav_random"];
+
+fn bad(key: &str, reason: impl Into<String>) -> EnvError {
+    EnvError::Config {
+        key: key.to_owned(),
+        reason: reason.into(),
+    }
+}
+
+fn positive(key: &str, x: f64) -> EnvResult<()> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(bad(key, format!("{x} is not a positive number")))
+    }
+}
+
+impl EnvConfig {
+    /// Parses and validates TOML text.
+    ///
+    /// # Errors
+    /// [`EnvError::Parse`] naming the unknown key or bad value and its line;
+    /// [`EnvError::Config`] for values out of range.
+    pub fn from_toml(text: &str) -> EnvResult<Self> {
+        let config: EnvConfig = toml::from_str(text).map_err(|e| EnvError::Parse(e.to_string()))?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Reads and parses a TOML file.
+    ///
+    /// # Errors
+    /// [`EnvError::Io`] when the file cannot be read, then as [`EnvConfig::from_toml`].
+    pub fn load(path: &std::path::Path) -> EnvResult<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| EnvError::Io {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        Self::from_toml(&text)
+    }
+
+    /// Checks every value (what serde's types cannot).
+    ///
+    /// # Errors
+    /// [`EnvError::Config`] naming the key.
+    pub fn validate(&self) -> EnvResult<()> {
+        if !matches!(self.robot.name.as_str(), "turtlebot" | "locobot" | "fetch") {
+            return Err(bad(
+                "robot.name",
+                format!(
+                    "`{}` is not a wheeled built-in robot (turtlebot, locobot, fetch)",
+                    self.robot.name
+                ),
+            ));
+        }
+        positive("robot.max_linear_speed", self.robot.max_linear_speed)?;
+        positive("robot.max_angular_speed", self.robot.max_angular_speed)?;
+        let t = &self.task;
+        if !TASK_NAMES.contains(&t.name.as_str()) {
+            return Err(bad(
+                "task.name",
+                format!("unknown task `{}` (known: {})", t.name, TASK_NAMES.join(", ")),
+            ));
+        }
+        if t.name == "point_nav_fixed" && (t.start.is_none() || t.goal.is_none()) {
+            return Err(bad("task.start", "point_nav_fixed needs both `start` and `goal`"));
+        }
+        for (key, v) in [
+            ("task.start", t.start.map(|s| s.to_vec())),
+            ("task.goal", t.goal.map(|g| g.to_vec())),
+        ] {
+            if let Some(v) = v
+                && v.iter().any(|x| !x.is_finite())
+            {
+                return Err(bad(key, "has a non-finite coordinate"));
+            }
+        }
+        positive("task.goal_tolerance", t.goal_tolerance)?;
+        let [lo, hi] = t.geodesic_range;
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
+            return Err(bad(
+                "task.geodesic_range",
+                format!("[{lo}, {hi}] is not an increasing range ≥ 0"),
+            ));
+        }
+        if !matches!(t.potential.as_str(), "geodesic" | "l2") {
+            return Err(bad(
+                "task.potential",
+                format!("`{}` is neither `geodesic` nor `l2`", t.potential),
+            ));
+        }
+        for (key, x) in [
+            ("task.potential_weight", t.potential_weight),
+            ("task.collision_penalty", t.collision_penalty),
+            ("task.success_reward", t.success_reward),
+        ] {
+            if !x.is_finite() {
+                return Err(bad(key, format!("{x} is not finite")));
+            }
+        }
+        for m in &self.sensors.modalities {
+            if !OBSERVATION_NAMES.contains(&m.as_str()) {
+                return Err(bad(
+                    "sensors.modalities",
+                    format!("unknown observation `{m}` (known: {})", OBSERVATION_NAMES.join(", ")),
+                ));
+            }
+        }
+        let c = &self.sensors.camera;
+        if !matches!(c.backend.as_str(), "auto" | "wgpu" | "raycast") {
+            return Err(bad(
+                "sensors.camera.backend",
+                format!("`{}` is not auto, wgpu or raycast", c.backend),
+            ));
+        }
+        let l = &self.sensors.lidar;
+        if !matches!(l.model.as_str(), "hokuyo" | "sick") {
+            return Err(bad(
+                "sensors.lidar.model",
+                format!("`{}` is neither `hokuyo` nor `sick`", l.model),
+            ));
+        }
+        if !(l.dropout.is_finite() && (0.0..=1.0).contains(&l.dropout)) {
+            return Err(bad(
+                "sensors.lidar.dropout",
+                format!("{} is not a probability", l.dropout),
+            ));
+        }
+        if !(l.noise_std.is_finite() && l.noise_std >= 0.0) {
+            return Err(bad("sensors.lidar.noise_std", format!("{} is not ≥ 0", l.noise_std)));
+        }
+        positive("physics.timestep", self.physics.timestep)?;
+        if self.physics.substeps == 0 {
+            return Err(bad("physics.substeps", "must be at least 1"));
+        }
+        if self.episode.max_steps == 0 {
+            return Err(bad("episode.max_steps", "must be at least 1"));
+        }
+        Ok(())
+    }
+}

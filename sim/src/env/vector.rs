@@ -1,0 +1,202 @@
+//! [`VecEnv`]: N environments stepped in one process across threads, with auto-reset and
+//! batched observations.
+
+use rayon::prelude::*;
+
+use super::config::EnvConfig;
+use super::environment::{Env, Info, Step};
+use super::error::{EnvError, EnvResult};
+use super::spaces::{Obs, ObsData};
+
+/// Observations of all envs, batched per name (env-major: env 0's values first).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BatchedObs {
+    /// (name, values of every env concatenated) pairs.
+    pub entries: Vec<(String, ObsData)>,
+}
+
+impl BatchedObs {
+    fn from(obs: &[Obs]) -> Self {
+        let Some(first) = obs.first() else {
+            return Self::default();
+        };
+        let entries = first
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(k, (name, data))| {
+                let mut all = data.empty_like(data.len() * obs.len());
+                for o in obs {
+                    all.extend_from(&o.entries[k].1);
+                }
+                (name.clone(), all)
+            })
+            .collect();
+        Self { entries }
+    }
+
+    /// The batch of observation `name`.
+    pub fn get(&self, name: &str) -> Option<&ObsData> {
+        self.entries.iter().find(|(n, _)| n == name).map(|(_, d)| d)
+    }
+}
+
+/// The result of [`VecEnv::step`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct VecStep {
+    /// Observations (after auto-reset for envs whose episode ended).
+    pub obs: BatchedObs,
+    /// Rewards.
+    pub rewards: Vec<f64>,
+    /// Terminated flags.
+    pub terminated: Vec<bool>,
+    /// Truncated flags.
+    pub truncated: Vec<bool>,
+    /// Per env: the step's info (for an env that ended, the final metrics of its episode).
+    pub infos: Vec<Info>,
+}
+
+/// N envs of one configuration, stepped in parallel (rayon); an env whose episode ends is reset
+/// at once with the next seed of its sequence, and its returned observation is the new
+/// episode's first (Gymnasium's same-step auto-reset).
+///
+/// ```no_run
+/// use hearth_sim::env::{EnvConfig, VecEnv};
+/// let config = EnvConfig::from_toml("[task]\nname = \"point_nav_random\"\n")?;
+/// let mut envs = VecEnv::new(&config, 4)?;
+/// envs.reset(0)?;
+/// let step = envs.step(&[[0.5, 0.0]; 4].concat())?;
+/// assert_eq!(step.rewards.len(), 4);
+/// # Ok::<(), hearth_sim::env::EnvError>(())
+/// ```
+pub struct VecEnv {
+    envs: Vec<Env>,
+    episodes: Vec<u64>,
+    base_seed: u64,
+}
+
+impl VecEnv {
+    /// Builds `n` envs (in parallel).
+    ///
+    /// # Errors
+    /// As [`Env::new`]; [`EnvError::Config`] for `n == 0`.
+    pub fn new(config: &EnvConfig, n: usize) -> EnvResult<Self> {
+        if n == 0 {
+            return Err(EnvError::Config {
+                key: "envs".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
+        let envs = (0..n)
+            .into_par_iter()
+            .map(|_| Env::new(config.clone()))
+            .collect::<EnvResult<Vec<_>>>()?;
+        Ok(Self {
+            envs,
+            episodes: vec![0; n],
+            base_seed: 0,
+        })
+    }
+
+    /// Number of envs.
+    pub fn len(&self) -> usize {
+        self.envs.len()
+    }
+
+    /// Whether there are no envs (never: `new` refuses 0).
+    pub fn is_empty(&self) -> bool {
+        self.envs.is_empty()
+    }
+
+    /// The envs.
+    pub fn envs(&self) -> &[Env] {
+        &self.envs
+    }
+
+    fn seed_of(&self, env: usize) -> u64 {
+        // Distinct, reproducible seeds per env and episode.
+        self.base_seed
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add((env as u64) << 32)
+            .wrapping_add(self.episodes[env])
+    }
+
+    /// Resets every env (env `i`'s episodes get seeds derived from `seed`, `i` and the episode
+    /// count).
+    ///
+    /// # Errors
+    /// The first env error.
+    pub fn reset(&mut self, seed: u64) -> EnvResult<BatchedObs> {
+        self.base_seed = seed;
+        self.episodes.iter_mut().for_each(|e| *e = 0);
+        let seeds: Vec<u64> = (0..self.envs.len()).map(|i| self.seed_of(i)).collect();
+        let obs = self
+            .envs
+            .par_iter_mut()
+            .zip(seeds)
+            .map(|(env, s)| env.reset(s).map(|(o, _)| o))
+            .collect::<EnvResult<Vec<_>>>()?;
+        Ok(BatchedObs::from(&obs))
+    }
+
+    /// Steps every env with its slice of `actions` (2 values per env, env-major).
+    ///
+    /// # Errors
+    /// [`EnvError::BadAction`] for a wrong total length (nothing is stepped), or the first env
+    /// error.
+    pub fn step(&mut self, actions: &[f32]) -> EnvResult<VecStep> {
+        let n = self.envs.len();
+        if actions.len() != 2 * n {
+            return Err(EnvError::BadAction(format!(
+                "expected {} values (2 per env), got {}",
+                2 * n,
+                actions.len()
+            )));
+        }
+        if let Some(bad) = actions.iter().find(|a| !a.is_finite()) {
+            return Err(EnvError::BadAction(format!("non-finite entry {bad}")));
+        }
+        let next_seeds: Vec<u64> = (0..n)
+            .map(|i| {
+                self.episodes[i] += 1;
+                let s = self.seed_of(i);
+                self.episodes[i] -= 1;
+                s
+            })
+            .collect();
+        let results = self
+            .envs
+            .par_iter_mut()
+            .zip(actions.par_chunks(2))
+            .zip(next_seeds)
+            .map(|((env, a), next)| -> EnvResult<(Step, bool)> {
+                let mut step = env.step(a)?;
+                let done = step.terminated || step.truncated;
+                if done {
+                    step.obs = env.reset(next)?.0;
+                }
+                Ok((step, done))
+            })
+            .collect::<EnvResult<Vec<_>>>()?;
+        let mut out = VecStep {
+            obs: BatchedObs::default(),
+            rewards: Vec::with_capacity(n),
+            terminated: Vec::with_capacity(n),
+            truncated: Vec::with_capacity(n),
+            infos: Vec::with_capacity(n),
+        };
+        let mut obs = Vec::with_capacity(n);
+        for (i, (step, done)) in results.into_iter().enumerate() {
+            if done {
+                self.episodes[i] += 1;
+            }
+            out.rewards.push(step.reward);
+            out.terminated.push(step.terminated);
+            out.truncated.push(step.truncated);
+            out.infos.push(step.info);
+            obs.push(step.obs);
+        }
+        out.obs = BatchedObs::from(&obs);
+        Ok(out)
+    }
+}
