@@ -415,7 +415,8 @@ pub(crate) fn plant(w: &mut UrdfWriter, v: usize, m: Material) {
 /// Rug: small rectangle, large rectangle, round.
 pub(crate) fn rug(w: &mut UrdfWriter, v: usize, m: Material) {
     let b = w.base();
-    let t = 0.01;
+    // A flat-weave rug: thin enough for low robot bases (the TurtleBot clears ~1 cm).
+    let t = 0.006;
     let part = match v {
         0 => Part::cuboid([1.2, 1.8, t], [0.0, 0.0, t / 2.0], m),
         1 => Part::cuboid([2.0, 3.0, t], [0.0, 0.0, t / 2.0], m),

@@ -12,8 +12,8 @@ use super::task::{Ending, Metrics, PointNav};
 use crate::assets::Category;
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
-    Backend, Camera, CameraConfig, CameraIntrinsics, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality, ModalitySet,
-    OccupancyGrid, OccupancyGridSpec, RayScene, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
+    Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
+    ModalitySet, OccupancyGrid, OccupancyGridSpec, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
 };
 use crate::world::{BUILDING_PREFIX, ModelHandle, Snapshot, World, WorldConfig};
 
@@ -52,9 +52,8 @@ pub struct Step {
 
 struct LidarRig {
     visuals: VisualScene,
-    rays: RayScene,
-    planar: Option<(Lidar, Scan)>,
-    multi: Option<(Lidar, Scan)>,
+    planar: Option<(Lidar, Scan, CulledRays)>,
+    multi: Option<(Lidar, Scan, CulledRays)>,
     grid: Option<OccupancyGrid>,
     sensor_in_base: Isometry3<f64>,
 }
@@ -149,8 +148,9 @@ impl Env {
         let maps = SceneMaps::build(
             &home,
             &MapOptions {
-                resolution: 0.1,
-                robot_radius: robot_radius(&config.robot.name),
+                resolution: 0.05,
+                // A margin keeps sampled starts and planned paths off the furniture's edges.
+                robot_radius: robot_radius(&config.robot.name) + 0.05,
                 floor_clearance: ground_clearance(&config.robot.name),
                 ..MapOptions::default()
             },
@@ -195,10 +195,10 @@ impl Env {
             } else {
                 LidarSpec::hokuyo_urg_04lx()
             };
-            let make = |spec: LidarSpec, salt: u64| -> EnvResult<(Lidar, Scan)> {
+            let make = |spec: LidarSpec, salt: u64| -> EnvResult<(Lidar, Scan, CulledRays)> {
                 let mut lidar = Lidar::new(spec, noise, salt)?;
                 lidar.ignore_items(own.iter().copied(), IgnoredHits::PassThrough);
-                Ok((lidar, Scan::default()))
+                Ok((lidar, Scan::default(), CulledRays::default()))
             };
             let planar = if wants("scan") || wants("occupancy_grid") {
                 Some(make(planar_spec, 1)?)
@@ -220,10 +220,8 @@ impl Env {
             } else {
                 None
             };
-            let rays = RayScene::new(&visuals);
             Some(LidarRig {
                 visuals,
-                rays,
                 planar,
                 multi,
                 grid,
@@ -284,6 +282,12 @@ impl Env {
         self.robot
     }
 
+    /// The home's traversability map (cells the robot's footprint fits), for scripted policies
+    /// and planners (`SceneMaps::shortest_path`).
+    pub fn maps(&self) -> &SceneMaps {
+        &self.maps
+    }
+
     /// Start (x, y, yaw) and goal (x, y) of the current episode.
     pub fn start_and_goal(&self) -> ([f64; 3], [f64; 2]) {
         (self.task.start, self.task.goal)
@@ -328,7 +332,7 @@ impl Env {
     fn lidar_rays(&self, multi: bool) -> usize {
         let Some(rig) = &self.lidar else { return 0 };
         let l = if multi { &rig.multi } else { &rig.planar };
-        l.as_ref().map_or(0, |(l, _)| l.spec().rays())
+        l.as_ref().map_or(0, |(l, _, _)| l.spec().rays())
     }
 
     /// Starts an episode: restores the settled home, lets the task pick start and goal (from
@@ -353,7 +357,7 @@ impl Env {
             camera.reset_flow();
         }
         if let Some(rig) = &mut self.lidar {
-            for (l, _) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
+            for (l, _, _) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
                 l.reseed(seed);
             }
         }
@@ -432,13 +436,12 @@ impl Env {
             camera.render(&self.world, self.camera_set)?;
         }
         if let Some(rig) = &mut self.lidar {
-            rig.rays.update(&rig.visuals, &self.world);
             let base = self.world.base_pose(self.robot)?;
             let sensor = base * rig.sensor_in_base;
-            for (l, scan) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
-                l.scan(&rig.rays, &sensor, scan);
+            for (l, scan, culled) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
+                l.scan_culled(culled, &rig.visuals, &self.world, &sensor, scan);
             }
-            if let (Some(grid), Some((_, scan))) = (&mut rig.grid, &rig.planar) {
+            if let (Some(grid), Some((_, scan, _))) = (&mut rig.grid, &rig.planar) {
                 grid.update(scan, &rig.sensor_in_base)?;
             }
         }
@@ -458,12 +461,12 @@ impl Env {
                     let mut out = Vec::new();
                     match space.name.as_str() {
                         "scan" => {
-                            if let Some((_, scan)) = &rig.planar {
+                            if let Some((_, scan, _)) = &rig.planar {
                                 scan.normalized_into(&mut out);
                             }
                         }
                         "scan_16" => {
-                            if let Some((_, scan)) = &rig.multi {
+                            if let Some((_, scan, _)) = &rig.multi {
                                 scan.normalized_into(&mut out);
                             }
                         }
