@@ -413,8 +413,8 @@ fn bad_specs_give_typed_errors() {
     assert_eq!(scan.hit_count(), 0);
 }
 
-#[test]
-fn a_fetch_in_a_generated_home_scans_from_its_laser_link() {
+/// The generated home of seed 1 in a world, with its Fetch.
+fn fetch_home() -> (World, hearth_sim::world::LoadedScene, hearth_sim::world::ModelHandle) {
     let scene = generate(&GenerateOptions {
         seed: 1,
         ..Default::default()
@@ -423,6 +423,12 @@ fn a_fetch_in_a_generated_home_scans_from_its_laser_link() {
     let mut world = World::new(WorldConfig::default()).unwrap();
     let loaded = world.load_scene(&scene).unwrap();
     let fetch = loaded.robot.expect("generated homes place a Fetch");
+    (world, loaded, fetch)
+}
+
+#[test]
+fn a_fetch_in_a_generated_home_scans_from_its_laser_link() {
+    let (world, loaded, fetch) = fetch_home();
     assert_eq!(world.model(fetch).unwrap().name(), "fetch");
     let visuals = VisualScene::from_world(&world);
     let mut rays = RayScene::new(&visuals);
@@ -486,14 +492,7 @@ fn a_fetch_in_a_generated_home_scans_from_its_laser_link() {
 
 #[test]
 fn culled_scans_match_full_scans_as_the_robot_moves() {
-    let scene = generate(&GenerateOptions {
-        seed: 1,
-        ..Default::default()
-    })
-    .unwrap();
-    let mut world = World::new(WorldConfig::default()).unwrap();
-    let loaded = world.load_scene(&scene).unwrap();
-    let fetch = loaded.robot.unwrap();
+    let (world, _, fetch) = fetch_home();
     let visuals = VisualScene::from_world(&world);
     let mut rays = RayScene::new(&visuals);
     let own = model_items(&visuals, &world, fetch).unwrap();

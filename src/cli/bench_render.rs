@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::{ArgGroup, Args};
+use clap::Args;
 use hearth_sim::sensors::{Camera, Modality, ModalitySet};
 use hearth_sim::world::{World, WorldConfig};
 use serde_json::json;
@@ -13,17 +13,9 @@ use serde_json::json;
 use super::render::CameraArgs;
 
 #[derive(Args, Debug)]
-#[command(group(ArgGroup::new("source").required(true).args(["scene", "generate"])))]
 pub struct BenchRenderArgs {
-    /// Scene file (JSON) to load.
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Generate a home with this seed instead of loading a file.
-    #[arg(long)]
-    generate: Option<u64>,
-    /// Rooms of the generated home besides the corridor.
-    #[arg(long, default_value_t = 5)]
-    rooms: usize,
+    #[command(flatten)]
+    home: super::home::HomeArgs,
     /// Robot carrying the camera.
     #[arg(long, default_value = "fetch")]
     robot: String,
@@ -45,7 +37,7 @@ pub fn run(a: BenchRenderArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.frames > 0, "--frames must be positive");
     let modalities = Modality::parse_list(&a.modalities)?;
     let config = a.camera.config()?;
-    let home = super::home::load_home(a.scene.as_deref(), a.generate, a.rooms, Some(&a.robot))?;
+    let home = a.home.load(Some(&a.robot))?;
     let mut world = World::new(WorldConfig::default())?;
     let loaded = world.load_scene(&home).context("loading the home into the world")?;
     let robot = loaded.robot.context("the scene places no robot to carry the camera")?;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use clap::{ArgGroup, Args, ValueEnum};
+use clap::{Args, ValueEnum};
 use hearth_sim::scene::{RobotPlacement, SceneFile};
 use hearth_sim::world::{World, WorldConfig};
 use serde_json::json;
@@ -23,17 +23,9 @@ pub enum BenchRobot {
 }
 
 #[derive(Args, Debug)]
-#[command(group(ArgGroup::new("source").required(true).args(["scene", "generate"])))]
 pub struct BenchSimArgs {
-    /// Scene file (JSON) to load.
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Generate a home with this seed instead of loading a file.
-    #[arg(long)]
-    generate: Option<u64>,
-    /// Rooms of the generated home besides the corridor (2 to 12).
-    #[arg(long, default_value_t = 5)]
-    rooms: usize,
+    #[command(flatten)]
+    home: super::home::HomeArgs,
     /// Robot in the home.
     #[arg(long, value_enum, default_value_t = BenchRobot::Fetch)]
     robot: BenchRobot,
@@ -122,7 +114,7 @@ fn time_world(scene: &SceneFile, config: &WorldConfig, a: &BenchSimArgs) -> anyh
 
 /// The home to time: the file, or a generated one (with a Fetch placement in its corridor).
 fn bench_scene(a: &BenchSimArgs) -> anyhow::Result<SceneFile> {
-    super::home::load_home(a.scene.as_deref(), a.generate, a.rooms, None)
+    a.home.load(None)
 }
 
 /// Runs `hearth bench sim`.

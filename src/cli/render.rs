@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::{ArgGroup, Args};
+use clap::Args;
 use hearth_sim::sensors::{Backend, Camera, CameraConfig, Modality, Mount, Preset};
 use hearth_sim::world::{World, WorldConfig};
 
@@ -40,17 +40,9 @@ impl CameraArgs {
 }
 
 #[derive(Args, Debug)]
-#[command(group(ArgGroup::new("source").required(true).args(["scene", "generate"])))]
 pub struct RenderArgs {
-    /// Scene file (JSON) to load.
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Generate a home with this seed instead of loading a file.
-    #[arg(long)]
-    generate: Option<u64>,
-    /// Rooms of the generated home besides the corridor.
-    #[arg(long, default_value_t = 5)]
-    rooms: usize,
+    #[command(flatten)]
+    home: super::home::HomeArgs,
     /// Robot carrying the camera (fetch, locobot, turtlebot).
     #[arg(long, default_value = "fetch")]
     robot: String,
@@ -71,7 +63,7 @@ pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     let modalities = Modality::parse_list(&a.modalities)?;
     anyhow::ensure!(!modalities.is_empty(), "--modalities names no modality");
     let config = a.camera.config()?;
-    let home = super::home::load_home(a.scene.as_deref(), a.generate, a.rooms, Some(&a.robot))?;
+    let home = a.home.load(Some(&a.robot))?;
     let mut world = World::new(WorldConfig::default())?;
     let loaded = world.load_scene(&home).context("loading the home into the world")?;
     let robot = loaded.robot.context("the scene places no robot to carry the camera")?;

@@ -497,6 +497,29 @@ impl Frame {
     }
 }
 
+/// Checks a backend's render inputs: one pose per scene item, a finite camera pose.
+pub(crate) fn check_render_inputs(
+    item_poses: &[Isometry3<f64>],
+    items: usize,
+    camera: &Isometry3<f64>,
+) -> SensorResult<()> {
+    if item_poses.len() != items {
+        return Err(SensorError::InvalidParameter {
+            name: "item_poses",
+            value: item_poses.len() as f64,
+            reason: "must hold one pose per scene item",
+        });
+    }
+    if camera.to_homogeneous().iter().any(|x| !x.is_finite()) {
+        return Err(SensorError::InvalidParameter {
+            name: "camera",
+            value: f64::NAN,
+            reason: "camera pose must be finite",
+        });
+    }
+    Ok(())
+}
+
 /// Where a camera or LiDAR sits.
 ///
 /// ```

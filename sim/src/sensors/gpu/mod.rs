@@ -689,21 +689,7 @@ impl GpuCamera {
         modalities: ModalitySet,
         frame: &mut Frame,
     ) -> SensorResult<()> {
-        if item_poses.len() != self.ranges.len() {
-            return Err(SensorError::InvalidParameter {
-                name: "item_poses",
-                value: item_poses.len() as f64,
-                reason: "must hold one pose per scene item",
-            });
-        }
-        let cam_m = camera.to_homogeneous();
-        if cam_m.iter().any(|x| !x.is_finite()) {
-            return Err(SensorError::InvalidParameter {
-                name: "camera",
-                value: f64::NAN,
-                reason: "camera pose must be finite",
-            });
-        }
+        crate::sensors::camera::check_render_inputs(item_poses, self.ranges.len(), camera)?;
         let k = self.intrinsics;
         frame.prepare(k.width, k.height, modalities);
 

@@ -8,7 +8,7 @@ use parry3d::math::{Pose, Vector};
 use rayon::prelude::*;
 
 use super::RayScene;
-use crate::sensors::camera::{CameraIntrinsics, Frame, Modality, ModalitySet, RenderOptions};
+use crate::sensors::camera::{CameraIntrinsics, Frame, Modality, ModalitySet, RenderOptions, check_render_inputs};
 use crate::sensors::error::{SensorError, SensorResult};
 use crate::sensors::shading::{BACKGROUND_SRGB, LightSample, light_at, shade, to_srgb8};
 use crate::sensors::visuals::{PbrMaterial, SceneLight, VisualScene};
@@ -135,21 +135,8 @@ impl RaycastCamera {
         modalities: ModalitySet,
         frame: &mut Frame,
     ) -> SensorResult<()> {
-        if item_poses.len() != self.materials.len() {
-            return Err(SensorError::InvalidParameter {
-                name: "item_poses length",
-                value: item_poses.len() as f64,
-                reason: "must equal the number of scene items",
-            });
-        }
+        check_render_inputs(item_poses, self.materials.len(), camera)?;
         let cam = to_pose(camera);
-        if !(cam.translation.is_finite() && cam.rotation.is_finite()) {
-            return Err(SensorError::InvalidParameter {
-                name: "camera pose",
-                value: f64::NAN,
-                reason: "must be finite",
-            });
-        }
         self.rays.update_from_poses(item_poses);
         let k = self.intrinsics;
         frame.prepare(k.width, k.height, modalities);
