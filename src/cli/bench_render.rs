@@ -6,8 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use hearth_sim::sensors::{Camera, Modality, ModalitySet};
-use hearth_sim::world::{World, WorldConfig};
+use hearth_sim::sensors::{Modality, ModalitySet};
 use serde_json::json;
 
 use super::render::CameraArgs;
@@ -37,12 +36,7 @@ pub fn run(a: BenchRenderArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.frames > 0, "--frames must be positive");
     let modalities = Modality::parse_list(&a.modalities)?;
     let config = a.camera.config()?;
-    let home = a.home.load(Some(&a.robot))?;
-    let mut world = World::new(WorldConfig::default())?;
-    let loaded = world.load_scene(&home).context("loading the home into the world")?;
-    let robot = loaded.robot.context("the scene places no robot to carry the camera")?;
-    world.settle(120);
-    let mut camera = Camera::new(&world, Some(robot), config.clone())?;
+    let (world, _, mut camera) = super::render::robot_camera(&a.home, &a.robot, config.clone())?;
     let triangles = camera.scene().triangle_estimate(16);
     println!(
         "{} items (~{triangles} triangles), {}×{}, backend {} ({}), preset {}",

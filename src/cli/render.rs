@@ -56,19 +56,28 @@ pub struct RenderArgs {
     out: PathBuf,
 }
 
+/// The home in a settled world, its robot, and a camera on the robot.
+pub(crate) fn robot_camera(
+    home: &super::home::HomeArgs,
+    robot: &str,
+    config: CameraConfig,
+) -> anyhow::Result<(World, hearth_sim::world::ModelHandle, Camera)> {
+    let scene = home.load(Some(robot))?;
+    let mut world = World::new(WorldConfig::default())?;
+    let loaded = world.load_scene(&scene).context("loading the home into the world")?;
+    let robot = loaded.robot.context("the scene places no robot to carry the camera")?;
+    world.settle(120);
+    let camera = Camera::new(&world, Some(robot), config)?;
+    Ok((world, robot, camera))
+}
+
 /// Runs `hearth render`: loads the home, settles it, renders a first frame, drives the robot
 /// forward while turning for a quarter second (so the flows show motion), and writes the
 /// second frame.
 pub fn run(a: RenderArgs) -> anyhow::Result<()> {
     let modalities = Modality::parse_list(&a.modalities)?;
     anyhow::ensure!(!modalities.is_empty(), "--modalities names no modality");
-    let config = a.camera.config()?;
-    let home = a.home.load(Some(&a.robot))?;
-    let mut world = World::new(WorldConfig::default())?;
-    let loaded = world.load_scene(&home).context("loading the home into the world")?;
-    let robot = loaded.robot.context("the scene places no robot to carry the camera")?;
-    world.settle(120);
-    let mut camera = Camera::new(&world, Some(robot), config)?;
+    let (mut world, robot, mut camera) = robot_camera(&a.home, &a.robot, a.camera.config()?)?;
     camera.render(&world, modalities)?;
     world.drive(robot, 0.4, 0.4)?;
     for _ in 0..8 {
