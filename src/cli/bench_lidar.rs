@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use hearth_sim::scene::{GenerateOptions, SceneFile, generate};
+use hearth_sim::scene::SceneFile;
 use hearth_sim::sensors::{
     CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene, lidar_pose, model_items,
 };
@@ -77,21 +77,10 @@ pub struct BenchLidarArgs {
     json: Option<PathBuf>,
 }
 
-/// The home to scan: the file, or a generated one (with a Fetch in its corridor).
+/// The home to scan: the file, or a generated one (seed 1 by default, with a Fetch in its
+/// corridor).
 fn bench_scene(a: &BenchLidarArgs) -> anyhow::Result<SceneFile> {
-    match &a.scene {
-        Some(path) => SceneFile::load(path).with_context(|| format!("loading scene `{}`", path.display())),
-        None => {
-            let seed = a.generate.unwrap_or(1);
-            generate(&GenerateOptions {
-                seed,
-                rooms: a.rooms,
-                robot: Some("fetch".to_owned()),
-                small_objects: true,
-            })
-            .with_context(|| format!("generating a home (seed {seed}, {} rooms)", a.rooms))
-        }
-    }
+    super::home::load_home(a.scene.as_deref(), Some(a.generate.unwrap_or(1)), a.rooms, None)
 }
 
 /// Runs `hearth bench lidar`.

@@ -421,7 +421,9 @@ impl Env {
         let floor = |name: &str| {
             let model = name.split('/').next().unwrap_or(name);
             name == "ground"
-                || name.starts_with(&format!("{BUILDING_PREFIX}floor/"))
+                || name
+                    .strip_prefix(BUILDING_PREFIX)
+                    .is_some_and(|rest| rest.starts_with("floor/"))
                 || self.rug_names.iter().any(|r| r == model)
         };
         Ok(self

@@ -75,21 +75,27 @@ fn slab(min: Vector, max: Vector, o: Vector, inv: Vector, limit: f32) -> Option<
 impl FlatBvh {
     /// Builds over `items` (ids) with bounds `bounds[id]`.
     pub(crate) fn build(items: &[u32], bounds: &[Bounds]) -> Self {
-        let mut bvh = FlatBvh {
-            nodes: Vec::with_capacity(2 * items.len().max(1)),
-            order: items.to_vec(),
-        };
+        let mut bvh = FlatBvh::default();
+        bvh.rebuild(items, bounds);
+        bvh
+    }
+
+    /// Rebuilds over `items` in place, reusing the node and order buffers (no allocation once
+    /// they are large enough).
+    pub(crate) fn rebuild(&mut self, items: &[u32], bounds: &[Bounds]) {
+        self.nodes.clear();
+        self.order.clear();
+        self.order.extend_from_slice(items);
         if items.is_empty() {
-            return bvh;
+            return;
         }
-        bvh.nodes.push(Node {
+        self.nodes.push(Node {
             min: Vector::ZERO,
             max: Vector::ZERO,
             first: 0,
             count: 0,
         });
-        bvh.split(0, 0, items.len(), bounds);
-        bvh
+        self.split(0, 0, items.len(), bounds);
     }
 
     /// Makes node `index` cover `order[start..end]`, splitting it while that pays.

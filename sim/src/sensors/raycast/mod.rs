@@ -301,7 +301,8 @@ impl RayScene {
                 .collect();
             self.rest = FlatBvh::build(&rest, &self.bounds);
         }
-        self.movers = FlatBvh::build(&self.mover_items, &self.bounds);
+        // The movers' tree is rebuilt every update: reuse its buffers.
+        self.movers.rebuild(&self.mover_items, &self.bounds);
     }
 
     /// World pose of item `item`'s shape now.
