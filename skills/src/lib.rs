@@ -1,8 +1,9 @@
 //! # hearth-skills
 //!
 //! Skill primitives (navigate, push at pixel, grasp, place, open/close) that chain IK, the
-//! planners and execution in the simulator. They build on [`hearth_sim`]; the skills
-//! themselves are being written (see the project's issues).
+//! planners and execution in the simulator. Each skill returns a report on success and a
+//! [`SkillError`] with a [`SkillError::reason`] on failure; [`Execution`] chooses between
+//! controllers in physics (the default) and kinematic teleporting.
 //!
 //! ```
 //! let locobot = hearth_skills::kinematics::RobotModel::builtin("locobot").unwrap();
@@ -16,3 +17,9 @@ pub use hearth_kinematics as kinematics;
 pub use hearth_planning as planning;
 /// The simulator crate this one builds on.
 pub use hearth_sim as sim;
+
+pub mod error;
+pub mod execution;
+
+pub use error::{SkillError, SkillResult};
+pub use execution::Execution;
