@@ -168,3 +168,57 @@ fn bad_scenes_leave_the_world_unchanged() {
         assert_eq!(world.state_hash(), hash);
     }
 }
+
+/// Drawers and vertical-hinge doors of loaded furniture are free: no controller holds them, a
+/// reset to a new opening keeps them free, and they stay where they were left. The dishwasher's
+/// door, which gravity would swing down, stays held.
+#[test]
+fn furniture_drawers_are_passive_and_gravity_loaded_doors_are_held() {
+    use hearth_sim::world::JointCommand;
+    let mut scene = SceneFile::empty("cabinet and dishwasher");
+    scene
+        .objects
+        .push(SceneObject::new("cabinet", "bottom_cabinet", 1, [0.0, 0.0, 0.0]));
+    scene
+        .objects
+        .push(SceneObject::new("dishwasher", "dishwasher", 0, [2.0, 0.0, 0.0]));
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let cabinet = loaded.object("cabinet").unwrap();
+    let model = world.model(cabinet).unwrap().clone();
+    let names = model.variable_names().to_vec();
+    let commands = world.joint_commands(cabinet).unwrap().to_vec();
+    let drawers: Vec<usize> = (0..names.len())
+        .filter(|&v| {
+            model
+                .joints()
+                .iter()
+                .any(|j| j.variable == Some(v) && j.kind == JointKind::Prismatic)
+        })
+        .collect();
+    assert!(!drawers.is_empty(), "bottom cabinet 1 has drawers: {names:?}");
+    for &v in &drawers {
+        assert_eq!(commands[v], JointCommand::Off, "drawer joint {}", names[v]);
+    }
+    let mut q = world.joint_positions(cabinet).unwrap();
+    let v = drawers[0];
+    q[v] = (model.lower()[v] + model.upper()[v]) / 2.0;
+    world.reset_configuration(cabinet, &q).unwrap();
+    assert_eq!(world.joint_commands(cabinet).unwrap()[v], JointCommand::Off);
+    for _ in 0..60 {
+        world.step();
+    }
+    let after = world.joint_positions(cabinet).unwrap()[v];
+    assert!(
+        (after - q[v]).abs() < 0.01,
+        "the drawer stayed at {} (moved to {after})",
+        q[v]
+    );
+
+    let dishwasher = loaded.object("dishwasher").unwrap();
+    let held = world.joint_commands(dishwasher).unwrap();
+    assert!(
+        held.iter().any(|c| matches!(c, JointCommand::Position { .. })),
+        "the dishwasher door is held: {held:?}"
+    );
+}

@@ -4,10 +4,10 @@
 use std::collections::BTreeMap;
 
 use ::nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use hearth_kinematics::{RobotModel, to_pose};
+use hearth_kinematics::{JointKind, RobotModel, to_pose};
 use rapier3d::prelude::*;
 
-use super::control::DiffDriveConfig;
+use super::control::{DiffDriveConfig, JointCommand};
 use super::error::WorldError;
 use super::physics::{BodyId, StaticVisual, World};
 use super::spawn::{BaseMode, ModelHandle, SpawnOptions, named_configuration};
@@ -183,8 +183,9 @@ impl World {
     /// Spawns a scene: every floor, ceiling and wall piece as a fixed box body (except floor slabs
     /// whose walking face lies on the world's ground plane, z = 0, which the ground already
     /// provides), every object as
-    /// a model (fixed or free base as the scene says, its initial joint positions applied and
-    /// held by the joint controllers, friction from its material), and the robot when the scene
+    /// a model (fixed or free base as the scene says, its initial joint positions applied,
+    /// drawers and vertical-hinge doors free to move with their damping and friction, joints
+    /// gravity loads held by their controllers, friction from its material), and the robot when the scene
     /// places one (a built-in robot; wheeled robots such as the Fetch get a free base with
     /// their differential drive, arms a fixed base; the arm starts tucked).
     ///
@@ -259,6 +260,7 @@ impl World {
                             name: object.name.clone(),
                             source,
                         })?;
+                self.free_passive_joints(handle);
                 loaded.objects.insert(object.name.clone(), handle);
             }
             self.set_lights(scene.lights.clone());
@@ -340,5 +342,37 @@ impl World {
         }
         report.at_rest = report.max_linear_speed <= REST_LINEAR_SPEED && report.max_angular_speed <= REST_ANGULAR_SPEED;
         report
+    }
+}
+
+impl World {
+    /// Switches off the controllers of the object's joints that gravity does not load (drawers
+    /// on horizontal runners, doors on vertical hinges): they move freely with their damping and
+    /// friction, so a push or pull moves them and they stay where they are left. Joints that
+    /// gravity would swing or slide (oven and dishwasher doors, lids, sashes) keep the position
+    /// controller that holds their initial value, like a counterbalanced hinge.
+    fn free_passive_joints(&mut self, handle: ModelHandle) {
+        let Ok(entry) = self.entry(handle) else { return };
+        let model = entry.model.clone();
+        let mut passive = Vec::new();
+        for joint in model.joints() {
+            let Some(v) = joint.variable else { continue };
+            let Ok(pose) = self.link_pose(handle, &model.links()[joint.child].name) else {
+                continue;
+            };
+            let up = (pose.rotation * joint.axis.into_inner()).z.abs();
+            let free = match joint.kind {
+                JointKind::Prismatic => up < 0.1,
+                JointKind::Revolute | JointKind::Continuous => up > 0.9,
+                _ => false,
+            };
+            if free {
+                passive.push(v);
+            }
+        }
+        for v in passive {
+            self.state.models[handle.index()].commands[v] = JointCommand::Off;
+            self.write_motor(handle, v);
+        }
     }
 }

@@ -550,7 +550,9 @@ impl World {
     }
 
     /// Resets a model to configuration `q` (joint positions set directly, velocities zeroed)
-    /// and makes `q` the position target of every joint.
+    /// and makes `q` the position target of every actuated joint. Joints under
+    /// [`JointCommand::Off`] (the passive joints of loaded furniture, or joints switched off)
+    /// take their new positions and stay free.
     ///
     /// # Errors
     /// Unknown model; wrong length, non-finite or out-of-limit values.
@@ -574,7 +576,10 @@ impl World {
         self.write_configuration(handle, q);
         let entry = &mut self.state.models[handle.index()];
         for (v, &x) in q.iter().enumerate() {
-            entry.commands[v] = JointCommand::Position { target: x };
+            // Unactuated joints (passive furniture joints, joints switched off) stay free.
+            if entry.commands[v] != JointCommand::Off {
+                entry.commands[v] = JointCommand::Position { target: x };
+            }
         }
         for v in 0..q.len() {
             self.write_motor(handle, v);
