@@ -43,14 +43,9 @@ pub struct NavPlan {
     pub length: f64,
 }
 
-/// The live world as the base planner sees it: everything but the robot, the ground and
-/// bodies entirely below the footprint's clearance (floors, rugs), with the margin applied.
-pub(crate) fn live_view(
-    world: &World,
-    robot: ModelHandle,
-    footprint: &BaseFootprint,
-    margin: f64,
-) -> SkillResult<WorldObstacles> {
+/// Bodies entirely below the footprint's clearance (floors, rugs, thresholds) and the
+/// ground, sorted: nothing the base can bump into.
+pub(crate) fn low_bodies(world: &World, footprint: &BaseFootprint) -> Vec<BodyId> {
     let mut tops: Vec<((u32, u32), f64, BodyId)> = Vec::new();
     for (_, co) in world.colliders().iter() {
         if let Some(parent) = co.parent() {
@@ -68,6 +63,20 @@ pub(crate) fn live_view(
         }
     }
     low.extend(world.ground());
+    low.sort_by_key(|b| b.handle().into_raw_parts());
+    low.dedup();
+    low
+}
+
+/// The live world as the base planner sees it: everything but the robot and the
+/// [`low_bodies`], with the margin applied.
+pub(crate) fn live_view(
+    world: &World,
+    robot: ModelHandle,
+    footprint: &BaseFootprint,
+    margin: f64,
+) -> SkillResult<WorldObstacles> {
+    let low = low_bodies(world, footprint);
     Ok(world
         .obstacles_view(&[robot])?
         .excluding_bodies(&low)

@@ -9,7 +9,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 use super::NavigateSettings;
 use super::footprint::{BaseFootprint, FootprintValidity};
-use super::plan::{NavPlan, heading, live_view};
+use super::plan::{NavPlan, heading, live_view, low_bodies};
 use crate::error::{SkillError, SkillResult};
 
 /// Turns sharper than this (rad) make the tracker stop at the corner and turn in place.
@@ -192,6 +192,9 @@ pub(crate) fn track(
     let mut pose = planar_pose(world, robot)?;
     let mut yaw_ref = pose[2];
     let mut settled_steps = 0;
+    // What the base stands on is no obstacle.
+    let support = low_bodies(world, footprint);
+    let key = |b: &hearth_sim::world::BodyId| b.handle().into_raw_parts();
     loop {
         if world.time() > deadline {
             return Ok(Outcome::TimeUp);
@@ -282,9 +285,10 @@ pub(crate) fn track(
             )));
         }
         if totals.steps.is_multiple_of(CONTACT_EVERY) {
-            let hit = world.contacts(robot)?.into_iter().find(|c| {
-                c.force.norm() > TOUCH_FORCE && c.point.z > footprint.z_min + 0.01 && c.other_name != "ground"
-            });
+            let hit = world
+                .contacts(robot)?
+                .into_iter()
+                .find(|c| c.force.norm() > TOUCH_FORCE && support.binary_search_by_key(&key(&c.other), key).is_err());
             match hit {
                 Some(c) => {
                     touch += CONTACT_EVERY as f64 * dt;
