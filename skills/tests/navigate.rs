@@ -90,7 +90,7 @@ fn load(scene: &SceneFile) -> (World, ModelHandle, SceneMaps) {
     let maps = SceneMaps::build(
         scene,
         &MapOptions {
-            robot_radius: 0.36,
+            robot_radius: 0.38,
             ..Default::default()
         },
     )

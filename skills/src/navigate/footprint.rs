@@ -14,7 +14,7 @@ use parry3d::shape::Cylinder;
 /// ```
 /// use hearth_skills::navigate::BaseFootprint;
 /// let fetch = BaseFootprint::for_builtin("fetch").unwrap();
-/// assert!((fetch.radius - 0.3).abs() < 1e-12);
+/// assert!(fetch.radius >= 0.32 && fetch.z_max > 1.1);
 /// assert!(BaseFootprint::for_builtin("panda").is_none());
 /// assert!(fetch.validate().is_ok());
 /// ```
@@ -29,14 +29,16 @@ pub struct BaseFootprint {
 }
 
 impl BaseFootprint {
-    /// The footprint of a built-in wheeled robot: `fetch` (radius 0.3 m, 3 cm clearance,
-    /// 1.1 m tall with the arm tucked), `locobot` (0.2 m, 8 mm, 0.7 m), `turtlebot`
-    /// (0.18 m, 8 mm, 0.45 m).
+    /// The footprint of a built-in wheeled robot, from ray casts against its collision
+    /// geometry at rest (arm tucked) around the base origin, rounded up: `fetch` radius
+    /// 0.32 m (the torso's back corners reach 0.321 m, the base 0.30 m), 3 cm clearance,
+    /// 1.12 m tall; `locobot` 0.25 m (the gripper reaches 0.243 m), 8 mm, 0.64 m;
+    /// `turtlebot` 0.245 m (the plates, set back, reach 0.240 m), 8 mm, 0.44 m.
     pub fn for_builtin(robot: &str) -> Option<Self> {
         let (radius, z_min, z_max) = match robot {
-            "fetch" => (0.3, 0.03, 1.1),
-            "locobot" => (0.2, 0.008, 0.7),
-            "turtlebot" => (0.18, 0.008, 0.45),
+            "fetch" => (0.32, 0.03, 1.12),
+            "locobot" => (0.25, 0.008, 0.64),
+            "turtlebot" => (0.245, 0.008, 0.44),
             _ => return None,
         };
         Some(Self { radius, z_min, z_max })
@@ -83,6 +85,7 @@ impl BaseFootprint {
 /// assert!(!v.is_valid(&[0.8, 0.0, 1.0]));
 /// assert_eq!(v.checks(), 2);
 /// assert_eq!(v.touching(&[0.8, 0.0, 0.0]).as_deref(), Some("wall"));
+/// assert!((v.clearance(&[0.0, 0.0, 0.0], 2.0) - (0.95 - fp.radius)).abs() < 1e-4);
 /// ```
 pub struct FootprintValidity<O: Obstacles> {
     obstacles: O,
@@ -120,6 +123,14 @@ impl<O: Obstacles> FootprintValidity<O> {
 
     fn pose(&self, q: &[f64]) -> Pose {
         Pose::from_parts(Vector::new(q[0] as f32, q[1] as f32, self.z_center), self.rotation)
+    }
+
+    /// The distance from the footprint at `q` to the nearest obstacle (beyond the view's
+    /// margin), or `max` when nothing is that close.
+    pub fn clearance(&self, q: &[f64], max: f64) -> f64 {
+        self.obstacles
+            .distance(&self.shape, &self.pose(q), max as f32)
+            .map_or(max, |(d, _)| f64::from(d))
     }
 
     /// The name of an obstacle the footprint touches at `q`, `None` when it is clear (the

@@ -11,8 +11,8 @@
 //! 3. **Execution.** [`Execution::Physics`]: pure-pursuit tracking on the differential drive
 //!    at the control rate, stopping and turning in place at sharp corners, with a final turn
 //!    to the goal yaw; a base that makes no progress for `stall_time` or keeps touching
-//!    something for a second is stopped and replans from where it stands (at most
-//!    `max_replans` times). [`Execution::Kinematic`]: the base is teleported along the plan,
+//!    something for a second is stopped, backs off 10 cm where that is free, and replans
+//!    from there (at most `max_replans` times). [`Execution::Kinematic`]: the base is teleported along the plan,
 //!    densely, after every pose was checked.
 //!
 //! Failures: a non-finite goal or bad settings → [`SkillError::BadInput`]; a goal off the
@@ -32,7 +32,7 @@
 //! use rand::SeedableRng;
 //!
 //! let home = generate(&GenerateOptions { seed: 3, rooms: 3, ..Default::default() }).unwrap();
-//! let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.36, ..Default::default() }).unwrap();
+//! let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.38, ..Default::default() }).unwrap();
 //! let mut world = World::new(WorldConfig::default()).unwrap();
 //! let fetch = world.load_scene(&home).unwrap().robot.unwrap();
 //! world.settle(300);
@@ -80,6 +80,9 @@ pub struct NavigateSettings {
     pub footprint: Option<BaseFootprint>,
     /// Clearance the plan keeps from obstacles, metres.
     pub margin: f64,
+    /// Smaller clearance allowed where `margin` leaves no way through (narrow doorways),
+    /// metres (capped at `margin`).
+    pub min_margin: f64,
     /// Largest final distance from the goal, metres.
     pub position_tolerance: f64,
     /// Largest final yaw error, radians.
@@ -115,7 +118,8 @@ impl Default for NavigateSettings {
         Self {
             execution: Execution::Physics,
             footprint: None,
-            margin: 0.03,
+            margin: 0.04,
+            min_margin: 0.015,
             position_tolerance: 0.1,
             yaw_tolerance: 0.1,
             max_linear_speed: 0.4,
@@ -126,7 +130,7 @@ impl Default for NavigateSettings {
             check_resolution: 0.03,
             plan_iterations: 20_000,
             plan_time: 5.0,
-            shortcut_attempts: 100,
+            shortcut_attempts: 300,
             max_replans: 3,
             stall_time: 4.0,
             time_limit: None,
@@ -160,6 +164,12 @@ impl NavigateSettings {
             return Err(SkillError::BadInput(format!(
                 "margin is {}; it must be in [0, 1] m",
                 self.margin
+            )));
+        }
+        if !(self.min_margin.is_finite() && (0.0..=1.0).contains(&self.min_margin)) {
+            return Err(SkillError::BadInput(format!(
+                "min_margin is {}; it must be in [0, 1] m",
+                self.min_margin
             )));
         }
         if self.plan_iterations == 0 {
@@ -220,7 +230,7 @@ pub struct NavigateReport {
 /// use hearth_skills::navigate::{NavigateSettings, Navigator};
 /// use rand::SeedableRng;
 /// # let home = generate(&GenerateOptions { seed: 3, rooms: 2, ..Default::default() }).unwrap();
-/// # let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.36, ..Default::default() }).unwrap();
+/// # let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.38, ..Default::default() }).unwrap();
 /// # let mut world = World::new(WorldConfig::default()).unwrap();
 /// # let fetch = world.load_scene(&home).unwrap().robot.unwrap();
 /// let nav = Navigator::new(NavigateSettings { execution: Execution::Kinematic, ..Default::default() })?;
@@ -351,6 +361,7 @@ impl Navigator {
                                 return Err(SkillError::Blocked(format!("{why} (after {replans} replans)")));
                             }
                             replans += 1;
+                            track::back_off(world, robot, &footprint, s, 0.1, &mut totals)?;
                             let here = planar_pose(world, robot)?;
                             plan = plan::plan_path(world, robot, maps, here, goal, &footprint, s, rng)
                                 .map_err(|e| SkillError::Blocked(format!("{why}; replanning failed: {e}")))?;
@@ -387,7 +398,7 @@ impl Navigator {
 /// use hearth_skills::navigate::{NavigateSettings, navigate};
 /// use rand::SeedableRng;
 /// # let home = generate(&GenerateOptions { seed: 3, rooms: 2, ..Default::default() }).unwrap();
-/// # let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.36, ..Default::default() }).unwrap();
+/// # let maps = SceneMaps::build(&home, &MapOptions { robot_radius: 0.38, ..Default::default() }).unwrap();
 /// # let mut world = World::new(WorldConfig::default()).unwrap();
 /// # let fetch = world.load_scene(&home).unwrap().robot.unwrap();
 /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);

@@ -39,6 +39,9 @@ pub struct NavPlan {
     /// Stretches of the grid path that collided with the live world and were replanned by
     /// SE(2) BiRRT.
     pub refined_segments: usize,
+    /// Refined stretches that needed the minimum margin
+    /// ([`NavigateSettings::min_margin`](super::NavigateSettings::min_margin)) to get through.
+    pub narrow_segments: usize,
     /// Length of the path in the plane, metres.
     pub length: f64,
 }
@@ -133,8 +136,14 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> SkillResult<NavPlan> {
     let view = live_view(world, robot, footprint, settings.margin)?;
-    let mut validity = FootprintValidity::new(view, *footprint);
-    if let Some(what) = validity.touching(&goal) {
+    let mut validity = FootprintValidity::new(view.clone(), *footprint);
+    // Where the margin leaves no way through (a narrow doorway), the plan may come as close
+    // as the minimum margin.
+    let mut narrow = FootprintValidity::new(
+        view.with_margin(settings.min_margin.min(settings.margin) as f32),
+        *footprint,
+    );
+    if let Some(what) = narrow.touching(&goal) {
         return Err(SkillError::Unreachable(format!(
             "the goal ({:.2}, {:.2}) puts the base in collision with `{what}`",
             goal[0], goal[1]
@@ -142,7 +151,9 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
     }
     if validity.touching(&start).is_some() {
         // The base is where it is: let it plan its way out of a contact (or out of the margin).
-        validity.set_free_near(Some(([start[0], start[1]], footprint.radius.min(0.25))));
+        let near = Some(([start[0], start[1]], footprint.radius.min(0.25)));
+        validity.set_free_near(near);
+        narrow.set_free_near(near);
     }
     let goal_xy = [goal[0], goal[1]];
     if maps.cell_of(goal_xy).is_none() {
@@ -205,6 +216,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
     let mut motion = MotionValidator::new(space.clone(), settings.check_resolution);
     let mut out: Vec<Vec<f64>> = vec![states[0].clone()];
     let mut refined = 0;
+    let mut narrow_segments = 0;
     let mut i = 0;
     let n = states.len();
     while i + 1 < n {
@@ -213,7 +225,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
             i += 1;
             continue;
         }
-        // The goal is valid, so some later state is.
+        // The search ends at the goal at the latest (it is valid at the minimum margin).
         let mut j = i + 1;
         while j + 1 < n && !validity.is_valid(&states[j]) {
             j += 1;
@@ -232,15 +244,20 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
         let request = PlanRequest::new(states[i].clone(), Goal::Config(states[j].clone()));
         let budget = Budget::iterations(settings.plan_iterations).with_time(settings.plan_time);
         let mut planner = BiRrt { range: Some(0.2) };
-        let solution = planner
-            .plan(&mut local_motion, &mut validity, &request, &budget, rng)
-            .map_err(|e| match e {
-                PlanError::Timeout { .. } => SkillError::PlanningTimeout(format!(
-                    "no SE(2) path around the obstacles between ({:.2}, {:.2}) and ({:.2}, {:.2}): {e}",
-                    states[i][0], states[i][1], states[j][0], states[j][1]
-                )),
-                other => SkillError::PlanningFailed(other.to_string()),
-            })?;
+        let solution = match planner.plan(&mut local_motion, &mut validity, &request, &budget, rng) {
+            Ok(found) => Ok(found),
+            Err(_) => {
+                narrow_segments += 1;
+                planner.plan(&mut local_motion, &mut narrow, &request, &budget, rng)
+            }
+        };
+        let solution = solution.map_err(|e| match e {
+            PlanError::Timeout { .. } => SkillError::PlanningTimeout(format!(
+                "no SE(2) path around the obstacles between ({:.2}, {:.2}) and ({:.2}, {:.2}): {e}",
+                states[i][0], states[i][1], states[j][0], states[j][1]
+            )),
+            other => SkillError::PlanningFailed(other.to_string()),
+        })?;
         out.extend(solution.path.states.into_iter().skip(1));
         refined += 1;
         i = j;
@@ -280,6 +297,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
         poses,
         grid_waypoints: grid.len(),
         refined_segments: refined,
+        narrow_segments,
         length,
     })
 }

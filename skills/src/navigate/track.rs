@@ -3,6 +3,7 @@
 //! stall and contact detection; or kinematic teleporting along the plan.
 
 use hearth_kinematics::wrap_angle;
+use hearth_planning::obstacles::Obstacles;
 use hearth_planning::validity::StateValidator;
 use hearth_sim::world::{ModelHandle, World};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
@@ -12,12 +13,20 @@ use super::footprint::{BaseFootprint, FootprintValidity};
 use super::plan::{NavPlan, heading, live_view, low_bodies};
 use crate::error::{SkillError, SkillResult};
 
-/// Turns sharper than this (rad) make the tracker stop at the corner and turn in place.
-const SHARP_TURN: f64 = 0.35;
+/// Turns sharper than this (rad) make the tracker stop at the corner and turn in place where
+/// the corner is close to an obstacle, so it cuts such corners by a few millimetres at most.
+const SHARP_TURN: f64 = 0.1;
+/// Clearance (m) at a corner above which pure pursuit may cut it (turns up to
+/// [`OPEN_TURN`]).
+const CUT_CLEARANCE: f64 = 0.15;
+/// Turns sharper than this (rad) always stop at the corner.
+const OPEN_TURN: f64 = 0.6;
+/// Heading error (rad) to which the base turns in place at a corner before driving on.
+const ALIGNED: f64 = 0.05;
 /// Heading error (rad) above which the base turns in place instead of driving.
 const TURN_IN_PLACE: f64 = 0.5;
 /// Distance (m) at which an intermediate corner counts as reached.
-const CORNER_CAPTURE: f64 = 0.06;
+const CORNER_CAPTURE: f64 = 0.02;
 /// Proportional gain of in-place turns (1/s).
 const TURN_GAIN: f64 = 2.0;
 /// Slowest forward speed while following (m/s), so the last centimetres do not take forever.
@@ -64,7 +73,7 @@ struct Follower<'a> {
 }
 
 impl<'a> Follower<'a> {
-    fn new(plan: &'a NavPlan) -> Self {
+    fn new<O: Obstacles>(plan: &'a NavPlan, clear: &FootprintValidity<O>) -> Self {
         let poses = &plan.poses[..];
         let n = poses.len();
         let mut cum = Vec::with_capacity(n);
@@ -79,7 +88,9 @@ impl<'a> Follower<'a> {
         for k in 1..n - 1 {
             let a = heading(xy(&poses[k - 1]), xy(&poses[k]));
             let b = heading(xy(&poses[k]), xy(&poses[k + 1]));
-            stop[k] = wrap_angle(b - a).abs() > SHARP_TURN;
+            let turn = wrap_angle(b - a).abs();
+            stop[k] =
+                turn > OPEN_TURN || (turn > SHARP_TURN && clear.clearance(&poses[k], CUT_CLEARANCE) < CUT_CLEARANCE);
         }
         let mut f = Self {
             poses,
@@ -167,6 +178,16 @@ fn limit(v: f64, w: f64, s: &NavigateSettings) -> (f64, f64) {
     (v * k, w * k)
 }
 
+/// Yaw rate of an in-place turn by `error` radians: proportional, at least 0.15 rad/s.
+fn turn_rate(error: f64, s: &NavigateSettings) -> f64 {
+    let w = (TURN_GAIN * error).clamp(-s.max_angular_speed, s.max_angular_speed);
+    if w.abs() < 0.15 {
+        0.15f64.min(s.max_angular_speed) * w.signum()
+    } else {
+        w
+    }
+}
+
 /// Drives along `plan` until the goal is reached within tolerance, the base is blocked, or
 /// the world's clock passes `deadline`.
 #[allow(clippy::too_many_arguments)]
@@ -181,7 +202,8 @@ pub(crate) fn track(
     totals: &mut Totals,
 ) -> SkillResult<Outcome> {
     let dt = world.config().control_dt();
-    let mut f = Follower::new(plan);
+    let clear = FootprintValidity::new(live_view(world, robot, footprint, 0.0)?, *footprint);
+    let mut f = Follower::new(plan, &clear);
     let goal_xy = xy(&goal);
     let (mut v_cmd, mut w_cmd) = (0.0, 0.0);
     let mut final_turn = false;
@@ -192,6 +214,8 @@ pub(crate) fn track(
     let mut pose = planar_pose(world, robot)?;
     let mut yaw_ref = pose[2];
     let mut settled_steps = 0;
+    // Turning in place onto the next stretch (at the start and after each corner).
+    let mut aligning = true;
     // What the base stands on is no obstacle.
     let support = low_bodies(world, footprint);
     let key = |b: &hearth_sim::world::BodyId| b.handle().into_raw_parts();
@@ -205,6 +229,7 @@ pub(crate) fn track(
         while f.stop_idx < f.last() && (dist(p, xy(&f.poses[f.stop_idx])) < CORNER_CAPTURE || f.seg >= f.stop_idx) {
             f.seg = f.seg.max(f.stop_idx);
             f.stop_idx = f.next_stop(f.stop_idx);
+            aligning = true;
         }
         let goal_dist = dist(p, goal_xy);
         let on_last = f.stop_idx == f.last();
@@ -220,8 +245,7 @@ pub(crate) fn track(
             if e.abs() < 0.4 * s.yaw_tolerance {
                 (0.0, 0.0)
             } else {
-                let w = (TURN_GAIN * e).clamp(-s.max_angular_speed, s.max_angular_speed);
-                (0.0, if w.abs() < 0.15 { 0.15 * w.signum() } else { w })
+                (0.0, turn_rate(e, s))
             }
         } else {
             let vertex = xy(&f.poses[f.stop_idx]);
@@ -234,11 +258,11 @@ pub(crate) fn track(
                 target
             };
             let alpha = wrap_angle(heading(p, aim) - pose[2]);
-            if alpha.abs() > TURN_IN_PLACE {
-                (
-                    0.0,
-                    (TURN_GAIN * alpha).clamp(-s.max_angular_speed, s.max_angular_speed),
-                )
+            if aligning && alpha.abs() < ALIGNED {
+                aligning = false;
+            }
+            if alpha.abs() > TURN_IN_PLACE || aligning {
+                (0.0, turn_rate(alpha, s))
             } else {
                 let d_stop = dist(p, vertex);
                 let brake = (2.0 * 0.8 * s.linear_acceleration * d_stop).sqrt();
@@ -304,6 +328,53 @@ pub(crate) fn track(
             }
         }
     }
+}
+
+/// Recovery before a replan: backs the base straight up by `distance` metres (at most 2 s)
+/// when the footprint is free there, else drives it forward by that much when that is free;
+/// does nothing when neither is. A base snagged while turning in place (a rug edge under it,
+/// a corner at its side) usually turns again from a few centimetres away.
+pub(crate) fn back_off(
+    world: &mut World,
+    robot: ModelHandle,
+    footprint: &BaseFootprint,
+    s: &NavigateSettings,
+    distance: f64,
+    totals: &mut Totals,
+) -> SkillResult<()> {
+    let view = live_view(world, robot, footprint, 0.0)?;
+    let mut check = FootprintValidity::new(view, *footprint);
+    let start = planar_pose(world, robot)?;
+    let (sin, cos) = start[2].sin_cos();
+    let free = |check: &mut FootprintValidity<_>, sign: f64| {
+        (1..=5).all(|k| {
+            let d = sign * distance * k as f64 / 5.0;
+            check.is_valid(&[start[0] + d * cos, start[1] + d * sin, start[2]])
+        })
+    };
+    let sign = if free(&mut check, -1.0) {
+        -1.0
+    } else if free(&mut check, 1.0) {
+        1.0
+    } else {
+        return Ok(());
+    };
+    let speed = 0.15f64.min(s.max_linear_speed);
+    let dt = world.config().control_dt();
+    let max = (2.0 / dt).ceil() as usize;
+    world.drive(robot, sign * speed, 0.0)?;
+    let mut before = start;
+    for _ in 0..max {
+        world.step();
+        totals.steps += 1;
+        let now = planar_pose(world, robot)?;
+        totals.distance += dist(xy(&now), xy(&before));
+        before = now;
+        if dist(xy(&now), xy(&start)) >= distance {
+            break;
+        }
+    }
+    stop(world, robot, totals)
 }
 
 /// Commands zero speed and steps until the base rests (at most 2 s).
