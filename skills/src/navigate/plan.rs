@@ -244,11 +244,20 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
         let request = PlanRequest::new(states[i].clone(), Goal::Config(states[j].clone()));
         let budget = Budget::iterations(settings.plan_iterations).with_time(settings.plan_time);
         let mut planner = BiRrt { range: Some(0.2) };
+        let local_shortcut = ShortcutSettings {
+            attempts: settings.shortcut_attempts,
+            time_limit: None,
+            fine_resolution: None,
+        };
+        // Each stretch is shortcut with the validator it was planned with, so a narrow
+        // passage comes out straight too (the whole-path pass below keeps the full margin).
         let solution = match planner.plan(&mut local_motion, &mut validity, &request, &budget, rng) {
-            Ok(found) => Ok(found),
+            Ok(found) => Ok(shortcut_random(&mut local_motion, &mut validity, &found.path, &local_shortcut, rng).0),
             Err(_) => {
                 narrow_segments += 1;
-                planner.plan(&mut local_motion, &mut narrow, &request, &budget, rng)
+                planner
+                    .plan(&mut local_motion, &mut narrow, &request, &budget, rng)
+                    .map(|found| shortcut_random(&mut local_motion, &mut narrow, &found.path, &local_shortcut, rng).0)
             }
         };
         let solution = solution.map_err(|e| match e {
@@ -258,7 +267,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
             )),
             other => SkillError::PlanningFailed(other.to_string()),
         })?;
-        out.extend(solution.path.states.into_iter().skip(1));
+        out.extend(solution.states.into_iter().skip(1));
         refined += 1;
         i = j;
     }

@@ -35,8 +35,11 @@ const MIN_SPEED: f64 = 0.04;
 const CONTACT_EVERY: usize = 5;
 /// Contact force (N) that counts as touching something.
 const TOUCH_FORCE: f64 = 2.0;
-/// How long (s) a touch may last before the base counts as blocked.
+/// How long (s) a touch may last before the base counts as blocked (when it is also not
+/// getting on: [`TOUCH_STALL`]).
 const TOUCH_TIME: f64 = 1.0;
+/// Seconds without progress that, with a lasting touch, count as blocked.
+const TOUCH_STALL: f64 = 0.5;
 
 /// The base pose in the plane: `[x, y, yaw]`.
 pub(crate) fn planar_pose(world: &World, robot: ModelHandle) -> SkillResult<[f64; 3]> {
@@ -320,7 +323,8 @@ pub(crate) fn track(
                 }
                 None => touch = 0.0,
             }
-            if touch > TOUCH_TIME {
+            // Grazing something while still getting on is no blockage.
+            if touch > TOUCH_TIME && stall > TOUCH_STALL {
                 return Ok(Outcome::Blocked(format!(
                     "{touched} for {:.1} s at ({:.2}, {:.2})",
                     touch, pose[0], pose[1]
