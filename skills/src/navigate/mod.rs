@@ -6,14 +6,15 @@
 //! 2. **Refinement** against the live world: every stretch of the grid path is checked with
 //!    the robot's [`BaseFootprint`] (a cylinder, with a margin) through
 //!    [`World::obstacles_view`]; stretches that touch something (a door leaf, a moved chair, a
-//!    box that is not on the map) are replanned by SE(2) BiRRT in a box around them, and the
-//!    whole path is then shortcut.
+//!    box that is not on the map) are replanned by SE(2) BiRRT in a box around them (with the
+//!    smaller `min_margin` where the margin leaves no way through) and shortcut, and the whole
+//!    path is then shortcut again.
 //! 3. **Execution.** [`Execution::Physics`]: pure-pursuit tracking on the differential drive
 //!    at the control rate, stopping and turning in place at sharp corners, with a final turn
 //!    to the goal yaw; a base that makes no progress for `stall_time` or keeps touching
-//!    something for a second is stopped, backs off 10 cm where that is free, and replans
-//!    from there (at most `max_replans` times). [`Execution::Kinematic`]: the base is teleported along the plan,
-//!    densely, after every pose was checked.
+//!    something for a second without progress is stopped, backs off 10 cm where that is
+//!    free, and replans from there (at most `max_replans` times). [`Execution::Kinematic`]:
+//!    the base is teleported along the plan, densely, after every pose was checked.
 //!
 //! Failures: a non-finite goal or bad settings → [`SkillError::BadInput`]; a goal off the
 //! map, in collision or with no path → [`SkillError::Unreachable`]; the SE(2) planner's
