@@ -20,6 +20,10 @@ use crate::error::{SkillError, SkillResult};
 /// nearest traversable cell (the live-world check decides whether the gap is really free).
 const SNAP_RADIUS: f64 = 0.6;
 
+/// Distance (metres) around a start in contact within which states count as free, so the
+/// base can plan its way out of the contact (or out of the margin).
+pub(crate) const FREE_NEAR: f64 = 0.12;
+
 /// Room (metres) around a blocked stretch of the grid path that its SE(2) planner may use.
 const LOCAL_PAD: f64 = 1.0;
 
@@ -151,7 +155,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
     }
     if validity.touching(&start).is_some() {
         // The base is where it is: let it plan its way out of a contact (or out of the margin).
-        let near = Some(([start[0], start[1]], footprint.radius.min(0.25)));
+        let near = Some(([start[0], start[1]], footprint.radius.min(FREE_NEAR)));
         validity.set_free_near(near);
         narrow.set_free_near(near);
     }

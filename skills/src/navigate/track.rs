@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 use super::NavigateSettings;
 use super::footprint::{BaseFootprint, FootprintValidity};
-use super::plan::{NavPlan, heading, live_view, low_bodies};
+use super::plan::{FREE_NEAR, NavPlan, heading, live_view, low_bodies};
 use crate::error::{SkillError, SkillResult};
 
 /// Turns sharper than this (rad) make the tracker stop at the corner and turn in place where
@@ -350,8 +350,9 @@ pub(crate) fn back_off(
     let mut check = FootprintValidity::new(view, *footprint);
     let start = planar_pose(world, robot)?;
     let (sin, cos) = start[2].sin_cos();
+    // The base may touch something where it stands: the first centimetres may too.
     let free = |check: &mut FootprintValidity<_>, sign: f64| {
-        (1..=5).all(|k| {
+        (3..=5).all(|k| {
             let d = sign * distance * k as f64 / 5.0;
             check.is_valid(&[start[0] + d * cos, start[1] + d * sin, start[2]])
         })
@@ -449,7 +450,7 @@ pub(crate) fn teleport(
     let start = plan.poses[0];
     // The base may start touching something; it leaves from where it stands.
     if validity.touching(&start).is_some() {
-        validity.set_free_near(Some((xy(&start), footprint.radius.min(0.25))));
+        validity.set_free_near(Some((xy(&start), footprint.radius.min(FREE_NEAR))));
     }
     let poses = dense_poses(plan, s.check_resolution.max(1e-3));
     if let Some(q) = poses.iter().find(|q| !validity.is_valid(&q[..])) {
