@@ -20,6 +20,8 @@ pub use hearth_sim as sim;
 
 pub mod error;
 pub mod execution;
+pub mod navigate;
 
 pub use error::{SkillError, SkillResult};
 pub use execution::Execution;
+pub use navigate::{NavigateReport, NavigateSettings, Navigator, navigate};
