@@ -18,8 +18,10 @@ pub use hearth_planning as planning;
 /// The simulator crate this one builds on.
 pub use hearth_sim as sim;
 
+pub mod arm;
 pub mod error;
 pub mod execution;
 
+pub use arm::{Arm, ArmSettings, ArmTarget};
 pub use error::{SkillError, SkillResult};
 pub use execution::Execution;

@@ -1,0 +1,874 @@
+//! [`Arm`]: planning and executing arm motions of a robot in the live world.
+//!
+//! A planned motion goes: collision-aware IK for the goal (several distinct solutions) →
+//! BiRRT in the joint space of the arm chain, checked against the live world (what the base
+//! stands on ignored, a held object attached) → random, then acceleration-bounded (parabolic)
+//! shortcutting → a jerk-limited (Ruckig) trajectory through the smoothed path, kept only if it
+//! is collision-free at a fine resolution → execution as position targets per control step
+//! ([`Execution::Physics`], with unexpected contacts reported as [`SkillError::Collision`]) or
+//! by setting the joints along it ([`Execution::Kinematic`]).
+//!
+//! Straight-line moves of the end effector ([`Arm::move_linear`]) are solved as small IK steps
+//! from the current configuration and executed at a fixed Cartesian speed until the distance is
+//! covered or the contact force on the arm passes a limit.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use hearth_kinematics::parry3d::shape::SharedShape;
+use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::goal::PoseGoal;
+use hearth_planning::obstacles::ParryScene;
+use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
+use hearth_planning::space::JointSpace;
+use hearth_planning::trajectory::{Limits, Trajectory};
+use hearth_planning::validity::Attached;
+use hearth_planning::{
+    BiRrt, Budget, Goal, MotionValidator, Path, PlanError, PlanRequest, Planner, RobotValidity, StateValidator,
+};
+use hearth_sim::world::{BodyId, JointCommand, ModelHandle, World};
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+use rand::Rng;
+
+use crate::error::{SkillError, SkillResult};
+use crate::execution::Execution;
+
+/// Settings of an [`Arm`].
+///
+/// ```
+/// let s = hearth_skills::arm::ArmSettings::fetch();
+/// assert_eq!(s.chain, "arm_with_torso");
+/// assert_eq!(s.tip, "gripper_link");
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmSettings {
+    /// Name of the planned chain of the robot model.
+    pub chain: String,
+    /// The end-effector link (IK tip; what grasps and pushes).
+    pub tip: String,
+    /// Links whose contacts with what the robot stands on are expected (base, wheels).
+    pub support_links: Vec<String>,
+    /// Clearance kept from obstacles by planned motions, metres.
+    pub margin: f32,
+    /// Resolution of edge checks, radians (joint-space distance).
+    pub resolution: f64,
+    /// BiRRT iterations at most (the budget that keeps a seed's result reproducible).
+    pub plan_iterations: u64,
+    /// Wall-clock safety limit of one BiRRT run, seconds.
+    pub plan_time: f64,
+    /// Random shortcut attempts after planning.
+    pub shortcut_attempts: usize,
+    /// Fraction of the joint velocity and acceleration limits used by planned motions.
+    pub velocity_scale: f64,
+    /// Contact force (N) on a link that counts as a collision during a planned motion.
+    pub contact_force: f64,
+    /// Control steps to hold the goal after a motion.
+    pub settle_steps: usize,
+    /// IK restarts per call when sampling goal configurations.
+    pub ik_attempts: usize,
+    /// Largest final joint error (rad or m) accepted after a physics execution.
+    pub tolerance: f64,
+}
+
+impl ArmSettings {
+    /// Settings for the Fetch: `arm_with_torso` to `gripper_link`, base and wheels as support.
+    pub fn fetch() -> Self {
+        Self {
+            chain: "arm_with_torso".into(),
+            tip: "gripper_link".into(),
+            support_links: vec!["base_link".into(), "l_wheel_link".into(), "r_wheel_link".into()],
+            margin: 0.01,
+            resolution: 0.02,
+            plan_iterations: 20_000,
+            plan_time: 5.0,
+            shortcut_attempts: 100,
+            velocity_scale: 0.6,
+            contact_force: 5.0,
+            settle_steps: 20,
+            ik_attempts: 40,
+            tolerance: 0.05,
+        }
+    }
+}
+
+/// Where a planned motion should take the end effector, in the world frame.
+///
+/// ```
+/// use hearth_skills::arm::ArmTarget;
+/// let t = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+/// assert!(matches!(t, ArmTarget::Position(_)));
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub enum ArmTarget {
+    /// A full pose of the tip link.
+    Pose(Isometry3<f64>),
+    /// A position of the tip link's origin, any orientation.
+    Position(Point3<f64>),
+    /// A configuration of the chain.
+    Joints(Vec<f64>),
+}
+
+/// An object held in the gripper: it moves with the tip and is checked like a link.
+#[derive(Clone)]
+pub struct Held {
+    /// The object's model.
+    pub object: ModelHandle,
+    /// Its name (for messages).
+    pub name: String,
+    /// Its bodies (ignored as obstacles while held).
+    pub bodies: Vec<BodyId>,
+    /// The object's root pose in the tip frame at the grasp.
+    pub offset: Isometry3<f64>,
+    /// Its collision shape.
+    pub shape: SharedShape,
+    /// The shape's pose in the tip frame.
+    pub shape_offset: Isometry3<f64>,
+}
+
+impl std::fmt::Debug for Held {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Held")
+            .field("name", &self.name)
+            .field("offset", &self.offset)
+            .finish()
+    }
+}
+
+/// What a planned motion took and gave.
+///
+/// ```
+/// let r = hearth_skills::arm::MotionReport::default();
+/// assert!(!r.executed);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MotionReport {
+    /// IK, planning and smoothing time.
+    pub planning_time: Duration,
+    /// Joint-space length of the executed path (rad, metres for the torso).
+    pub path_length: f64,
+    /// Duration of the trajectory, seconds.
+    pub duration: f64,
+    /// Waypoints of the planner's path.
+    pub waypoints: usize,
+    /// Whether the jerk-limited (Ruckig) trajectory was used (else the acceleration-bounded
+    /// one, when the jerk-limited one cut a corner into an obstacle).
+    pub jerk_limited: bool,
+    /// Whether the motion was executed (false for a dry run).
+    pub executed: bool,
+    /// Largest joint error at the end of execution (0 for kinematic execution).
+    pub tracking_error: f64,
+}
+
+/// A planned motion, ready to execute.
+#[derive(Clone, Debug)]
+pub struct ArmPlan {
+    /// The trajectory of the chain.
+    pub trajectory: Trajectory,
+    /// Its final configuration.
+    pub goal: Vec<f64>,
+    /// Timing and size.
+    pub report: MotionReport,
+}
+
+/// A straight-line move of the end effector.
+///
+/// ```
+/// use hearth_skills::arm::LinearMove;
+/// let m = LinearMove::new(nalgebra::Vector3::new(0.0, 0.0, 1.0), 0.1);
+/// assert_eq!(m.force_limit, 60.0);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearMove {
+    /// Direction in the world frame (normalised on use).
+    pub direction: Vector3<f64>,
+    /// Distance, metres.
+    pub distance: f64,
+    /// Cartesian speed, m/s.
+    pub speed: f64,
+    /// The move stops when the contact force on the arm (sum over its links, N) stays above
+    /// this for two control steps.
+    pub force_limit: f64,
+    /// Length of one IK step, metres.
+    pub step: f64,
+    /// Bodies the move may go into (the pushed or grasped object); everything else is an
+    /// obstacle for the straight-line path, which is cut short before the first collision.
+    pub ignore: Vec<BodyId>,
+    /// Whether the obstacles of the world are checked at all (else only self-collision).
+    pub check_world: bool,
+}
+
+impl LinearMove {
+    /// A move at 0.1 m/s with a 60 N force limit, 1 cm IK steps, checked against the world.
+    pub fn new(direction: Vector3<f64>, distance: f64) -> Self {
+        Self {
+            direction,
+            distance,
+            speed: 0.1,
+            force_limit: 60.0,
+            step: 0.01,
+            ignore: Vec::new(),
+            check_world: true,
+        }
+    }
+}
+
+/// How a straight-line move ended.
+///
+/// ```
+/// let r = hearth_skills::arm::LinearReport::default();
+/// assert_eq!(r.travelled, 0.0);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LinearReport {
+    /// Distance the IK path covers (less than asked where it was cut short), metres.
+    pub planned: f64,
+    /// Distance the tip travelled along the direction, metres.
+    pub travelled: f64,
+    /// Largest contact force on the arm seen (N).
+    pub peak_force: f64,
+    /// Whether the force limit stopped the move.
+    pub stopped_by_force: bool,
+    /// Simulated time taken, seconds.
+    pub duration: f64,
+}
+
+/// Plans and executes motions of one robot's arm in a [`World`].
+///
+/// ```no_run
+/// use hearth_skills::arm::{Arm, ArmSettings, ArmTarget};
+/// use hearth_skills::Execution;
+/// use hearth_sim::kinematics::RobotModel;
+/// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+/// use rand::SeedableRng;
+///
+/// let mut world = World::new(WorldConfig::default())?;
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())?;
+/// world.tuck(robot)?;
+/// let mut arm = Arm::new(&world, robot, ArmSettings::fetch())?;
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+/// let report = arm.move_to(&mut world, &ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0)), Execution::Physics, &mut rng)?;
+/// assert!(report.executed && report.duration > 0.0);
+/// # Ok::<(), hearth_skills::SkillError>(())
+/// ```
+pub struct Arm {
+    robot: ModelHandle,
+    chain: Chain,
+    tip: usize,
+    matrix: SelfCollisionMatrix,
+    space: JointSpace,
+    limits: Limits,
+    settings: ArmSettings,
+    held: Option<Held>,
+}
+
+impl std::fmt::Debug for Arm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Arm")
+            .field("chain", &self.chain.joint_names())
+            .field("settings", &self.settings)
+            .field("held", &self.held)
+            .finish()
+    }
+}
+
+impl Arm {
+    /// An arm helper for `robot`: resolves the chain and tip, computes the self-collision
+    /// matrix (once; a few hundred milliseconds for the Fetch).
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for an unknown chain or tip or unusable settings;
+    /// [`SkillError::World`] for an unknown robot.
+    pub fn new(world: &World, robot: ModelHandle, settings: ArmSettings) -> SkillResult<Self> {
+        let model = world.model(robot)?.clone();
+        let chain = Chain::named(&model, &settings.chain)
+            .map_err(|e| SkillError::BadInput(format!("chain `{}`: {e}", settings.chain)))?;
+        let tip = model
+            .link_index(&settings.tip)
+            .map_err(|e| SkillError::BadInput(format!("tip `{}`: {e}", settings.tip)))?;
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(settings.resolution)
+            || !positive(settings.plan_time)
+            || !positive(settings.contact_force)
+            || !positive(settings.tolerance)
+            || !(settings.velocity_scale > 0.0 && settings.velocity_scale <= 1.0)
+            || !(settings.margin.is_finite() && settings.margin >= 0.0)
+            || settings.plan_iterations == 0
+            || settings.ik_attempts == 0
+        {
+            return Err(SkillError::BadInput(format!("arm settings out of range: {settings:?}")));
+        }
+        let matrix = SelfCollisionMatrix::compute(
+            &model,
+            &SelfCollisionSettings {
+                samples: 500,
+                ..Default::default()
+            },
+        );
+        let space = JointSpace::from_chain(&chain).map_err(|e| SkillError::BadInput(e.to_string()))?;
+        let limits = Limits::for_chain(&chain).scaled(settings.velocity_scale, settings.velocity_scale);
+        Ok(Self {
+            robot,
+            chain,
+            tip,
+            matrix,
+            space,
+            limits,
+            settings,
+            held: None,
+        })
+    }
+
+    /// The robot.
+    pub fn robot(&self) -> ModelHandle {
+        self.robot
+    }
+
+    /// The planned chain.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ArmSettings {
+        &self.settings
+    }
+
+    /// The held object, if any.
+    pub fn held(&self) -> Option<&Held> {
+        self.held.as_ref()
+    }
+
+    /// Sets (or clears) the held object; it is attached to the tip for planning.
+    pub fn set_held(&mut self, held: Option<Held>) {
+        self.held = held;
+    }
+
+    /// The tip link's world pose now.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    pub fn tip_pose(&self, world: &World) -> SkillResult<Isometry3<f64>> {
+        Ok(world.link_pose(self.robot, &self.settings.tip)?)
+    }
+
+    /// The full configuration now, clamped to the limits (gravity can press a joint a hair
+    /// beyond its limit), and the chain's part of it.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    pub fn configuration(&self, world: &World) -> SkillResult<(Vec<f64>, Vec<f64>)> {
+        let model = self.chain.model();
+        let mut q = world.joint_positions(self.robot)?;
+        for (v, x) in q.iter_mut().enumerate() {
+            *x = x.clamp(model.lower()[v], model.upper()[v]);
+        }
+        let mut c = vec![0.0; self.chain.dof()];
+        self.chain.gather(&q, &mut c);
+        Ok((q, c))
+    }
+
+    /// What the robot's support links stand on (and the ground): never obstacles.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    pub fn support_bodies(&self, world: &World) -> SkillResult<Vec<BodyId>> {
+        let mut under: Vec<BodyId> = world
+            .contacts(self.robot)?
+            .into_iter()
+            .filter(|c| self.settings.support_links.iter().any(|l| *l == c.link))
+            .map(|c| c.other)
+            .collect();
+        under.extend(world.ground());
+        under.sort_by_key(|b| b.handle().into_raw_parts());
+        under.dedup();
+        Ok(under)
+    }
+
+    /// A validity checker of the chain against the live world now: the robot's own bodies,
+    /// what it stands on, the held object and `ignore` excluded, `margin` of clearance, the
+    /// held object attached.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    pub fn validity(&self, world: &World, ignore: &[BodyId], margin: f32) -> SkillResult<RobotValidity> {
+        let mut skip = self.support_bodies(world)?;
+        skip.extend_from_slice(ignore);
+        if let Some(h) = &self.held {
+            skip.extend_from_slice(&h.bodies);
+        }
+        let view = world
+            .obstacles_view(&[self.robot])?
+            .excluding_bodies(&skip)
+            .with_margin(margin);
+        self.checker(world, Arc::new(view))
+    }
+
+    fn checker(
+        &self,
+        world: &World,
+        obstacles: Arc<dyn hearth_planning::obstacles::Obstacles>,
+    ) -> SkillResult<RobotValidity> {
+        let (q, _) = self.configuration(world)?;
+        let mut v = RobotValidity::new(self.chain.clone(), self.matrix.clone(), obstacles);
+        v.set_reference(&q)?;
+        v.set_base(world.base_pose(self.robot)?);
+        if let Some(h) = &self.held {
+            v.attach(Attached {
+                name: h.name.clone(),
+                link: self.tip,
+                offset: h.shape_offset,
+                shape: h.shape.clone(),
+            });
+        }
+        Ok(v)
+    }
+
+    /// An IK solver for the tip with reproducible settings (no wall-clock limit).
+    fn ik(&self, world: &World, attempts: usize) -> SkillResult<IkSolver> {
+        let (q, _) = self.configuration(world)?;
+        let settings = IkSettings {
+            time_limit: None,
+            max_attempts: attempts.max(1),
+            ..IkSettings::default()
+        };
+        let tip = &self.chain.model().links()[self.tip].name;
+        let mut ik = IkSolver::new(self.chain.clone(), tip, settings)?;
+        ik.set_reference(&q)?;
+        Ok(ik)
+    }
+
+    /// Goal configurations for `target`: distinct collision-free IK solutions (or the given
+    /// joints, checked).
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed target; [`SkillError::IkFailed`] when no
+    /// collision-free solution is found; [`SkillError::Unreachable`] for joints in collision.
+    pub fn goal_configurations<R: Rng + ?Sized>(
+        &self,
+        world: &World,
+        target: &ArmTarget,
+        validity: &mut RobotValidity,
+        rng: &mut R,
+    ) -> SkillResult<Vec<Vec<f64>>> {
+        let (_, start) = self.configuration(world)?;
+        let base = world.base_pose(self.robot)?;
+        let ik_target = match target {
+            ArmTarget::Joints(q) => {
+                self.chain
+                    .check(q)
+                    .map_err(|e| SkillError::BadInput(format!("goal joints: {e}")))?;
+                if !validity.is_valid(q) {
+                    let why = validity.explain(q).map(|c| c.to_string()).unwrap_or_default();
+                    return Err(SkillError::Unreachable(format!("goal joints in collision: {why}")));
+                }
+                return Ok(vec![q.clone()]);
+            }
+            ArmTarget::Pose(p) => {
+                check_finite_pose(p)?;
+                IkTarget::Pose(base.inverse() * p)
+            }
+            ArmTarget::Position(p) => {
+                if !p.coords.iter().all(|x| x.is_finite()) {
+                    return Err(SkillError::BadInput(format!("goal position {p:?} is not finite")));
+                }
+                IkTarget::Position(base.inverse() * p)
+            }
+        };
+        let mut ik = self.ik(world, self.settings.ik_attempts)?;
+        let goal = PoseGoal {
+            target: ik_target,
+            solutions: 4,
+            max_calls: 8,
+            min_separation: 0.1,
+        };
+        match goal.sample(&mut ik, validity, &start, rng) {
+            Ok(g) => Ok(g.states().to_vec()),
+            Err(PlanError::BadInput(m)) => Err(SkillError::BadInput(m)),
+            Err(e @ PlanError::NoGoalConfiguration { .. }) => Err(SkillError::IkFailed(e.to_string())),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Plans a motion to `target` without executing it (a dry run): IK goals, BiRRT, parabolic
+    /// shortcutting, jerk-limited timing. `ignore` lists bodies the motion may touch.
+    ///
+    /// # Errors
+    /// [`SkillError::IkFailed`], [`SkillError::PlanningFailed`] (e.g. the start in collision,
+    /// naming the contact), [`SkillError::PlanningTimeout`], [`SkillError::BadInput`].
+    pub fn plan<R: Rng + ?Sized>(
+        &self,
+        world: &World,
+        target: &ArmTarget,
+        ignore: &[BodyId],
+        rng: &mut R,
+    ) -> SkillResult<ArmPlan> {
+        let t0 = Instant::now();
+        let mut validity = self.validity(world, ignore, self.settings.margin)?;
+        let (_, start) = self.configuration(world)?;
+        let goals = self.goal_configurations(world, target, &mut validity, rng)?;
+        let mut motion = MotionValidator::new(self.space.clone(), self.settings.resolution);
+        let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals));
+        let budget = Budget::iterations(self.settings.plan_iterations).with_time(self.settings.plan_time);
+        let solution = BiRrt::default()
+            .plan(&mut motion, &mut validity, &request, &budget, rng)
+            .map_err(|e| SkillError::from(e.explain_with(&request, |q| validity.explain(q).map(|c| c.to_string()))))?;
+        let smoothed = smooth(
+            Smoothing::Parabolic,
+            &mut motion,
+            &mut validity,
+            &solution.path,
+            &self.limits,
+            &ShortcutSettings {
+                attempts: self.settings.shortcut_attempts,
+                time_limit: None,
+                fine_resolution: Some(self.settings.resolution / 10.0),
+            },
+            Duration::from_secs(1),
+            rng,
+        )?;
+        let goal = smoothed.path.states.last().cloned().unwrap_or(start);
+        // Jerk-limited execution through waypoints of the smoothed motion; it may cut corners,
+        // so it is kept only if it stays collision-free.
+        let waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+        let (trajectory, jerk_limited) = match Trajectory::jerk_limited(&self.space, &waypoints, &self.limits) {
+            Ok(j)
+                if j.check(&self.space, &mut validity, self.settings.resolution / 10.0)
+                    .is_ok() =>
+            {
+                (j, true)
+            }
+            _ => (smoothed.trajectory, false),
+        };
+        let path_length = trajectory.length(&self.space, self.settings.resolution);
+        Ok(ArmPlan {
+            report: MotionReport {
+                planning_time: t0.elapsed(),
+                path_length,
+                duration: trajectory.duration(),
+                waypoints: solution.path.states.len(),
+                jerk_limited,
+                executed: false,
+                tracking_error: 0.0,
+            },
+            trajectory,
+            goal,
+        })
+    }
+
+    /// Plans and executes a motion to `target`.
+    ///
+    /// # Errors
+    /// As [`Arm::plan`] and [`Arm::execute`].
+    pub fn move_to<R: Rng + ?Sized>(
+        &mut self,
+        world: &mut World,
+        target: &ArmTarget,
+        execution: Execution,
+        rng: &mut R,
+    ) -> SkillResult<MotionReport> {
+        let plan = self.plan(world, target, &[], rng)?;
+        self.execute(world, &plan, execution)
+    }
+
+    /// Executes a planned motion. In physics, the trajectory is sampled at the control rate as
+    /// position targets of the chain's joints (other joints keep their commands), then the goal
+    /// is held for `settle_steps`; kinematically, the joints are set along it.
+    ///
+    /// # Errors
+    /// [`SkillError::Collision`] naming the link and body when a contact pushes harder than
+    /// `contact_force` (the arm stops where it is); [`SkillError::Slipped`] when a held object
+    /// leaves the gripper; [`SkillError::NotFinished`] when the final joint error exceeds the
+    /// tolerance.
+    pub fn execute(&mut self, world: &mut World, plan: &ArmPlan, execution: Execution) -> SkillResult<MotionReport> {
+        let mut report = plan.report.clone();
+        let dt = world.config().control_dt();
+        let duration = plan.trajectory.duration();
+        let motion_steps = (duration / dt).ceil() as usize;
+        let mut q = vec![0.0; self.chain.dof()];
+        match execution {
+            Execution::Kinematic => {
+                let (mut full, _) = self.configuration(world)?;
+                let commands = world.joint_commands(self.robot)?.to_vec();
+                for k in 1..=motion_steps {
+                    plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
+                    self.chain.clamp(&mut q);
+                    self.chain.scatter(&q, &mut full);
+                    world.reset_configuration(self.robot, &full)?;
+                    self.carry_held(world)?;
+                }
+                self.restore_commands(world, &commands)?;
+                for _ in 0..self.settings.settle_steps {
+                    world.step();
+                }
+                self.check_held(world)?;
+            }
+            Execution::Physics => {
+                let support = self.support_bodies(world)?;
+                for k in 1..=motion_steps + self.settings.settle_steps {
+                    plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
+                    self.chain.clamp(&mut q);
+                    self.command(world, &q)?;
+                    world.step();
+                    if let Some(hit) = self.unexpected_contact(world, &support, &[])? {
+                        self.hold_here(world)?;
+                        return Err(SkillError::Collision(format!("{hit} at t = {:.2} s", world.time())));
+                    }
+                    self.check_held(world)?;
+                }
+                let (_, reached) = self.configuration(world)?;
+                report.tracking_error = reached
+                    .iter()
+                    .zip(&plan.goal)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                if report.tracking_error > self.settings.tolerance {
+                    return Err(SkillError::NotFinished(format!(
+                        "largest joint error {:.3} after the motion (tolerance {:.3})",
+                        report.tracking_error, self.settings.tolerance
+                    )));
+                }
+            }
+        }
+        report.executed = true;
+        Ok(report)
+    }
+
+    /// Position targets for the chain's joints.
+    fn command(&self, world: &mut World, q: &[f64]) -> SkillResult<()> {
+        let model = self.chain.model();
+        for (&v, &x) in self.chain.variables().iter().zip(q) {
+            world.set_joint_command(
+                self.robot,
+                &model.variable_names()[v],
+                JointCommand::Position { target: x },
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Holds the chain where it is now.
+    fn hold_here(&self, world: &mut World) -> SkillResult<()> {
+        let (_, q) = self.configuration(world)?;
+        self.command(world, &q)
+    }
+
+    /// Re-installs the commands of joints outside the chain (a kinematic reset overwrote them).
+    fn restore_commands(&self, world: &mut World, commands: &[JointCommand]) -> SkillResult<()> {
+        let model = self.chain.model();
+        for (v, &c) in commands.iter().enumerate() {
+            if self.chain.variables().contains(&v) {
+                continue;
+            }
+            world.set_joint_command(self.robot, &model.variable_names()[v], c)?;
+        }
+        Ok(())
+    }
+
+    /// Moves a held object with the tip (kinematic execution).
+    fn carry_held(&self, world: &mut World) -> SkillResult<()> {
+        if let Some(h) = &self.held {
+            let pose = self.tip_pose(world)? * h.offset;
+            world.place(h.object, &pose)?;
+        }
+        Ok(())
+    }
+
+    /// Fails with `Slipped` when the held object is more than 3 cm from where the grasp put it.
+    fn check_held(&self, world: &World) -> SkillResult<()> {
+        if let Some(h) = &self.held {
+            let expected = self.tip_pose(world)? * h.offset;
+            let actual = world.base_pose(h.object)?;
+            let off = (expected.translation.vector - actual.translation.vector).norm();
+            if off > 0.03 {
+                return Err(SkillError::Slipped(format!(
+                    "`{}` is {off:.3} m from where the gripper holds it",
+                    h.name
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The first contact that pushes harder than `contact_force` on a link, other than the
+    /// support links on what they stand on, the held object, and `allowed` bodies.
+    fn unexpected_contact(&self, world: &World, support: &[BodyId], allowed: &[BodyId]) -> SkillResult<Option<String>> {
+        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
+        for c in world.contacts(self.robot)? {
+            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+            if on_support || held.contains(&c.other) || allowed.contains(&c.other) {
+                continue;
+            }
+            if c.force.norm() > self.settings.contact_force {
+                return Ok(Some(format!(
+                    "link `{}` touched `{}` ({:.1} N)",
+                    c.link,
+                    c.other_name,
+                    c.force.norm()
+                )));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The sum of contact forces on the arm's links (support contacts excluded), N.
+    fn arm_force(&self, world: &World, support: &[BodyId]) -> SkillResult<f64> {
+        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
+        Ok(world
+            .contacts(self.robot)?
+            .into_iter()
+            .filter(|c| {
+                let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+                !on_support && !held.contains(&c.other)
+            })
+            .map(|c| c.force.norm())
+            .sum())
+    }
+
+    /// The chain configurations of a straight-line move of the tip from where it is now, one
+    /// per IK step (the first is the current configuration), cut short before the first step
+    /// whose solution jumps, fails or collides; and the distance covered.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a zero or non-finite direction or distance.
+    pub fn linear_path(&self, world: &World, m: &LinearMove) -> SkillResult<(Vec<Vec<f64>>, f64)> {
+        let n = m.direction.norm();
+        if !n.is_finite() || n < 1e-9 {
+            return Err(SkillError::BadInput(format!(
+                "linear move direction {:?} has no length",
+                m.direction
+            )));
+        }
+        for (what, x) in [("distance", m.distance), ("speed", m.speed), ("step", m.step)] {
+            if !x.is_finite() || x <= 0.0 {
+                return Err(SkillError::BadInput(format!("linear move {what} {x} must be positive")));
+            }
+        }
+        if !m.force_limit.is_finite() || m.force_limit <= 0.0 {
+            return Err(SkillError::BadInput(format!(
+                "linear move force limit {} must be positive",
+                m.force_limit
+            )));
+        }
+        let base = world.base_pose(self.robot)?;
+        let dir = base.inverse_transform_vector(&(m.direction / n));
+        let mut validity = if m.check_world {
+            self.validity(world, &m.ignore, 0.0)?
+        } else {
+            self.checker(world, Arc::new(ParryScene::new(Vec::new())))?
+        };
+        let mut ik = self.ik(world, 1)?;
+        let (_, start) = self.configuration(world)?;
+        let start_pose = ik.tool_pose(&start)?;
+        let steps = (m.distance / m.step).ceil().max(1.0) as usize;
+        let mut states = vec![start];
+        let mut covered = 0.0;
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(0);
+        for i in 1..=steps {
+            let s = m.distance * i as f64 / steps as f64;
+            let target = Isometry3::from_parts(
+                Translation3::from(start_pose.translation.vector + dir * s),
+                start_pose.rotation,
+            );
+            let prev = states.last().cloned().unwrap_or_default();
+            let solved = ik.solve_with(&IkTarget::Pose(target), &prev, &mut rng, |q| {
+                q.iter().zip(&prev).all(|(a, b)| (a - b).abs() < 0.2) && validity.is_valid(q)
+            });
+            match solved {
+                Ok(sol) => {
+                    states.push(sol.q);
+                    covered = s;
+                }
+                Err(_) => break,
+            }
+        }
+        Ok((states, covered))
+    }
+
+    /// Moves the tip along a straight line (orientation kept) at `m.speed`, stopping at the
+    /// end of the IK path or when the contact force on the arm passes `m.force_limit`.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
+    /// the first IK step is possible.
+    pub fn move_linear(
+        &mut self,
+        world: &mut World,
+        m: &LinearMove,
+        execution: Execution,
+    ) -> SkillResult<LinearReport> {
+        let (states, planned) = self.linear_path(world, m)?;
+        if states.len() < 2 {
+            return Err(SkillError::Unreachable(format!(
+                "no straight-line step of {:.3} m is possible along {:?}",
+                m.step, m.direction
+            )));
+        }
+        let start_tip = self.tip_pose(world)?.translation.vector;
+        let dir = m.direction.normalize();
+        let dt = world.config().control_dt();
+        let segment = planned / (states.len() - 1) as f64 / m.speed;
+        let duration = segment * (states.len() - 1) as f64;
+        let steps = (duration / dt).ceil() as usize;
+        let support = self.support_bodies(world)?;
+        let commands = world.joint_commands(self.robot)?.to_vec();
+        let (mut full, _) = self.configuration(world)?;
+        let mut q = vec![0.0; self.chain.dof()];
+        let mut report = LinearReport {
+            planned,
+            ..Default::default()
+        };
+        let t0 = world.time();
+        let mut over = 0;
+        for k in 1..=steps + self.settings.settle_steps / 2 {
+            let t = (k as f64 * dt).min(duration) / segment;
+            let i = (t.floor() as usize).min(states.len() - 2);
+            let f = (t - i as f64).clamp(0.0, 1.0);
+            for (j, x) in q.iter_mut().enumerate() {
+                *x = states[i][j] + f * (states[i + 1][j] - states[i][j]);
+            }
+            match execution {
+                Execution::Physics => self.command(world, &q)?,
+                Execution::Kinematic => {
+                    self.chain.scatter(&q, &mut full);
+                    world.reset_configuration(self.robot, &full)?;
+                    self.restore_commands(world, &commands)?;
+                    self.carry_held(world)?;
+                }
+            }
+            world.step();
+            let force = self.arm_force(world, &support)?;
+            report.peak_force = report.peak_force.max(force);
+            over = if force > m.force_limit { over + 1 } else { 0 };
+            if over >= 2 {
+                report.stopped_by_force = true;
+                self.hold_here(world)?;
+                break;
+            }
+        }
+        report.travelled = (self.tip_pose(world)?.translation.vector - start_tip).dot(&dir);
+        report.duration = world.time() - t0;
+        Ok(report)
+    }
+}
+
+fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {
+    let finite = p.translation.vector.iter().all(|x| x.is_finite()) && p.rotation.coords.iter().all(|x| x.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(SkillError::BadInput(format!("goal pose {p:?} is not finite")))
+    }
+}
+
+/// The path a plan's trajectory follows, sampled at `resolution` (for inspection).
+///
+/// ```no_run
+/// # fn f(arm: &hearth_skills::arm::Arm, plan: &hearth_skills::arm::ArmPlan) {
+/// let path = hearth_skills::arm::plan_path(arm, plan, 0.05);
+/// assert!(path.states.len() >= 2);
+/// # }
+/// ```
+pub fn plan_path(arm: &Arm, plan: &ArmPlan, resolution: f64) -> Path {
+    plan.trajectory.to_path(&arm.space, resolution)
+}
