@@ -27,7 +27,7 @@ use hearth_planning::{
     BiRrt, Budget, Goal, MotionValidator, Path, PlanError, PlanRequest, Planner, RobotValidity, StateValidator,
 };
 use hearth_sim::world::{BodyId, JointCommand, ModelHandle, World};
-use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
 use crate::error::{SkillError, SkillResult};
@@ -68,6 +68,9 @@ pub struct ArmSettings {
     pub ik_attempts: usize,
     /// Largest final joint error (rad or m) accepted after a physics execution.
     pub tolerance: f64,
+    /// Distance from the tip link's origin to the fingertips along its approach axis (+x),
+    /// metres: where pushes touch.
+    pub tool_reach: f64,
 }
 
 impl ArmSettings {
@@ -87,6 +90,7 @@ impl ArmSettings {
             settle_steps: 20,
             ik_attempts: 40,
             tolerance: 0.05,
+            tool_reach: 0.036,
         }
     }
 }
@@ -850,6 +854,35 @@ impl Arm {
         report.duration = world.time() - t0;
         Ok(report)
     }
+}
+
+/// A tip orientation whose approach axis (+x) points along `approach` and whose +z is as close
+/// to world up as possible (world +x when `approach` is vertical), turned by `roll` about the
+/// approach axis.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// let r = hearth_skills::arm::approach_rotation(&Vector3::new(0.0, 0.0, -2.0), 0.0).unwrap();
+/// assert!((r * Vector3::x() - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-12);
+/// assert!(hearth_skills::arm::approach_rotation(&Vector3::zeros(), 0.0).is_err());
+/// ```
+///
+/// # Errors
+/// [`SkillError::BadInput`] for a zero or non-finite direction.
+pub fn approach_rotation(approach: &Vector3<f64>, roll: f64) -> SkillResult<UnitQuaternion<f64>> {
+    let n = approach.norm();
+    if !n.is_finite() || n < 1e-9 || !roll.is_finite() {
+        return Err(SkillError::BadInput(format!(
+            "approach direction {approach:?} (roll {roll}) is unusable"
+        )));
+    }
+    let x = approach / n;
+    let up = if x.z.abs() > 0.95 { Vector3::x() } else { Vector3::z() };
+    let z = (up - x * up.dot(&x)).normalize();
+    let y = z.cross(&x);
+    let r = nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_columns(&[x, y, z]));
+    Ok(UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_unchecked(x), roll)
+        * UnitQuaternion::from_rotation_matrix(&r))
 }
 
 fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {
