@@ -264,6 +264,8 @@ pub struct Arm {
     limits: Limits,
     settings: ArmSettings,
     held: Option<Held>,
+    /// Joint values (model variable, value) planning assumes instead of the measured ones.
+    assume: Vec<(usize, f64)>,
 }
 
 impl std::fmt::Debug for Arm {
@@ -320,6 +322,7 @@ impl Arm {
             limits,
             settings,
             held: None,
+            assume: Vec::new(),
         })
     }
 
@@ -348,6 +351,40 @@ impl Arm {
         self.held = held;
     }
 
+    /// Joints outside the chain (e.g. fingers about to open) that planning should assume at
+    /// the given values instead of where they are now; an empty list measures them all.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for an unknown joint or a value outside its limits.
+    pub fn assume_joints(&mut self, joints: &[(&str, f64)]) -> SkillResult<()> {
+        let model = self.chain.model();
+        let mut assume = Vec::with_capacity(joints.len());
+        for &(name, x) in joints {
+            let v = model
+                .variable_names()
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| SkillError::BadInput(format!("unknown joint `{name}`")))?;
+            if !(model.lower()[v]..=model.upper()[v]).contains(&x) || self.chain.variables().contains(&v) {
+                return Err(SkillError::BadInput(format!(
+                    "cannot assume `{name}` at {x}: outside its limits or part of the chain"
+                )));
+            }
+            assume.push((v, x));
+        }
+        self.assume = assume;
+        Ok(())
+    }
+
+    /// The reference configuration planning uses: measured, with assumed joints replaced.
+    fn reference(&self, world: &World) -> SkillResult<Vec<f64>> {
+        let (mut q, _) = self.configuration(world)?;
+        for &(v, x) in &self.assume {
+            q[v] = x;
+        }
+        Ok(q)
+    }
+
     /// The tip link's world pose now.
     ///
     /// # Errors
@@ -357,7 +394,8 @@ impl Arm {
     }
 
     /// The full configuration now, clamped to the limits (gravity can press a joint a hair
-    /// beyond its limit), and the chain's part of it.
+    /// beyond its limit), and the chain's part of it with continuous joints wrapped into
+    /// `(-π, π]`.
     ///
     /// # Errors
     /// [`SkillError::World`].
@@ -369,6 +407,11 @@ impl Arm {
         }
         let mut c = vec![0.0; self.chain.dof()];
         self.chain.gather(&q, &mut c);
+        for (x, &continuous) in c.iter_mut().zip(self.chain.continuous()) {
+            if continuous {
+                *x = hearth_kinematics::wrap_angle(*x);
+            }
+        }
         Ok((q, c))
     }
 
@@ -413,7 +456,7 @@ impl Arm {
         world: &World,
         obstacles: Arc<dyn hearth_planning::obstacles::Obstacles>,
     ) -> SkillResult<RobotValidity> {
-        let (q, _) = self.configuration(world)?;
+        let q = self.reference(world)?;
         let mut v = RobotValidity::new(self.chain.clone(), self.matrix.clone(), obstacles);
         v.set_reference(&q)?;
         v.set_base(world.base_pose(self.robot)?);
@@ -430,7 +473,7 @@ impl Arm {
 
     /// An IK solver for the tip with reproducible settings (no wall-clock limit).
     fn ik(&self, world: &World, attempts: usize) -> SkillResult<IkSolver> {
-        let (q, _) = self.configuration(world)?;
+        let q = self.reference(world)?;
         let settings = IkSettings {
             time_limit: None,
             max_attempts: attempts.max(1),
@@ -590,13 +633,15 @@ impl Arm {
         let duration = plan.trajectory.duration();
         let motion_steps = (duration / dt).ceil() as usize;
         let mut q = vec![0.0; self.chain.dof()];
+        plan.trajectory.sample(0.0, &mut q, None);
+        let turns = self.turns(world, &q)?;
         match execution {
             Execution::Kinematic => {
                 let (mut full, _) = self.configuration(world)?;
                 let commands = world.joint_commands(self.robot)?.to_vec();
                 for k in 1..=motion_steps {
                     plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
-                    self.chain.clamp(&mut q);
+                    self.unwrap_to(&mut q, &turns);
                     self.chain.scatter(&q, &mut full);
                     world.reset_configuration(self.robot, &full)?;
                     self.carry_held(world)?;
@@ -611,7 +656,7 @@ impl Arm {
                 let support = self.support_bodies(world)?;
                 for k in 1..=motion_steps + self.settings.settle_steps {
                     plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
-                    self.chain.clamp(&mut q);
+                    self.unwrap_to(&mut q, &turns);
                     self.command(world, &q)?;
                     world.step();
                     if let Some(hit) = self.unexpected_contact(world, &support, &[])? {
@@ -620,10 +665,13 @@ impl Arm {
                     }
                     self.check_held(world)?;
                 }
-                let (_, reached) = self.configuration(world)?;
+                let reached = self.measured(world)?;
+                let mut goal = vec![0.0; self.chain.dof()];
+                plan.trajectory.sample(duration, &mut goal, None);
+                self.unwrap_to(&mut goal, &turns);
                 report.tracking_error = reached
                     .iter()
-                    .zip(&plan.goal)
+                    .zip(&goal)
                     .map(|(a, b)| (a - b).abs())
                     .fold(0.0, f64::max);
                 if report.tracking_error > self.settings.tolerance {
@@ -636,6 +684,44 @@ impl Arm {
         }
         report.executed = true;
         Ok(report)
+    }
+
+    /// Clamps bounded joints into their limits and shifts continuous joints by whole turns so
+    /// that the trajectory's start lands on the measured start `from` (a wrapped angle sent as
+    /// a target would spin the joint the long way round).
+    fn unwrap_to(&self, q: &mut [f64], turns: &[f64]) {
+        let (lo, hi) = (self.chain.lower(), self.chain.upper());
+        for (i, x) in q.iter_mut().enumerate() {
+            if self.chain.continuous()[i] {
+                *x += turns[i];
+            } else {
+                *x = x.clamp(lo[i], hi[i]);
+            }
+        }
+    }
+
+    /// The chain's joint positions as measured (continuous joints not wrapped).
+    fn measured(&self, world: &World) -> SkillResult<Vec<f64>> {
+        let mut c = vec![0.0; self.chain.dof()];
+        self.chain.gather(&world.joint_positions(self.robot)?, &mut c);
+        Ok(c)
+    }
+
+    /// Whole turns between a trajectory start and the measured chain configuration.
+    fn turns(&self, world: &World, start: &[f64]) -> SkillResult<Vec<f64>> {
+        let measured = self.measured(world)?;
+        Ok(measured
+            .iter()
+            .zip(start)
+            .zip(self.chain.continuous())
+            .map(|((m, s), &c)| {
+                if c {
+                    ((m - s) / std::f64::consts::TAU).round() * std::f64::consts::TAU
+                } else {
+                    0.0
+                }
+            })
+            .collect())
     }
 
     /// Position targets for the chain's joints.
@@ -653,7 +739,9 @@ impl Arm {
 
     /// Holds the chain where it is now.
     fn hold_here(&self, world: &mut World) -> SkillResult<()> {
-        let (_, q) = self.configuration(world)?;
+        let mut q = self.measured(world)?;
+        let zero = vec![0.0; q.len()];
+        self.unwrap_to(&mut q, &zero);
         self.command(world, &q)
     }
 
@@ -818,6 +906,7 @@ impl Arm {
         let commands = world.joint_commands(self.robot)?.to_vec();
         let (mut full, _) = self.configuration(world)?;
         let mut q = vec![0.0; self.chain.dof()];
+        let turns = self.turns(world, &states[0])?;
         let mut report = LinearReport {
             planned,
             ..Default::default()
@@ -831,6 +920,7 @@ impl Arm {
             for (j, x) in q.iter_mut().enumerate() {
                 *x = states[i][j] + f * (states[i + 1][j] - states[i][j]);
             }
+            self.unwrap_to(&mut q, &turns);
             match execution {
                 Execution::Physics => self.command(world, &q)?,
                 Execution::Kinematic => {

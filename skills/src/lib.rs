@@ -21,6 +21,7 @@ pub use hearth_sim as sim;
 pub mod arm;
 pub mod error;
 pub mod execution;
+pub mod grasp;
 pub mod push;
 
 pub use arm::{Arm, ArmSettings, ArmTarget};
