@@ -72,6 +72,8 @@ pub struct GraspSettings {
     pub side: bool,
     /// Consider top grasps.
     pub top: bool,
+    /// Grasps computed again at most this often when the object is nudged on the way.
+    pub attempts: usize,
     /// Plan the approach only, execute nothing.
     pub dry_run: bool,
 }
@@ -89,6 +91,7 @@ impl Default for GraspSettings {
             speed: 0.08,
             side: true,
             top: true,
+            attempts: 3,
             dry_run: false,
         }
     }
@@ -266,47 +269,81 @@ pub fn grasp<R: Rng + ?Sized>(
     let bodies = world.model_bodies(object)?;
     let base = world.base_pose(arm.robot())?;
     let from = Point3::from(base.translation.vector);
-    let candidates = grasp_candidates(world, object, &from, settings)?;
-    if candidates.is_empty() {
-        return Err(SkillError::Unreachable(format!(
-            "`{name}` is wider than the gripper opens ({:.3} m) every way it was tried",
-            settings.max_width
-        )));
-    }
     // Plans assume the fingers open, as they will be.
     let model_name = world.model(arm.robot())?.name().to_owned();
     let open: Vec<(String, f64)> = GripperConfig::for_builtin(&model_name)
         .map(|g| g.joints.into_iter().zip(g.open).collect())
         .unwrap_or_default();
     let open: Vec<(&str, f64)> = open.iter().map(|(j, x)| (j.as_str(), *x)).collect();
-    arm.assume_joints(&open)?;
-    let chosen = choose(world, arm, &candidates, &bodies, settings, rng);
-    arm.assume_joints(&[])?;
-    let (rejected, candidate, plan) = chosen.map_err(|last| {
-        SkillError::Unreachable(format!(
-            "none of {} grasps of `{name}` can be reached: {last}",
-            candidates.len(),
+    let mut report = None;
+    let mut disturbed = String::new();
+    for _ in 0..settings.attempts {
+        let candidates = grasp_candidates(world, object, &from, settings)?;
+        if candidates.is_empty() {
+            return Err(SkillError::Unreachable(format!(
+                "`{name}` is wider than the gripper opens ({:.3} m) every way it was tried",
+                settings.max_width
+            )));
+        }
+        arm.assume_joints(&open)?;
+        let chosen = choose(world, arm, &candidates, &bodies, settings, rng);
+        arm.assume_joints(&[])?;
+        let (rejected, candidate, plan) = chosen.map_err(|last| {
+            SkillError::Unreachable(format!(
+                "none of {} grasps of `{name}` can be reached: {last}",
+                candidates.len(),
+            ))
+        })?;
+        let mut r = GraspReport {
+            candidate: candidate.clone(),
+            rejected,
+            approach: plan.report.clone(),
+            lift: None,
+            lifted: 0.0,
+        };
+        if settings.dry_run {
+            return Ok(r);
+        }
+        // The object may be nudged on the way (a light object pushes back less than the
+        // contact threshold); then the grasp is computed again from where it is.
+        let planned_at = world.base_pose(object)?.translation.vector;
+        world.gripper_open(arm.robot())?;
+        r.approach = arm.execute(world, &plan, execution)?;
+        let moved = (world.base_pose(object)?.translation.vector - planned_at).norm();
+        if moved > 0.01 {
+            disturbed = format!("`{name}` moved {moved:.3} m during the approach");
+            continue;
+        }
+        let approach = LinearMove {
+            speed: settings.speed,
+            force_limit: 30.0,
+            ignore: bodies.clone(),
+            ..LinearMove::new(candidate.approach, settings.approach)
+        };
+        let down = arm.move_linear(world, &approach, execution)?;
+        let moved = (world.base_pose(object)?.translation.vector - planned_at).norm();
+        if down.stopped_by_force || moved > 0.01 {
+            disturbed = format!(
+                "the final approach to `{name}` was blocked ({:.3} m of {:.3} m, object moved {moved:.3} m)",
+                down.travelled, settings.approach
+            );
+            let back = LinearMove {
+                speed: settings.speed,
+                check_world: false,
+                ..LinearMove::new(-candidate.approach, down.travelled.max(0.02))
+            };
+            arm.move_linear(world, &back, execution)?;
+            continue;
+        }
+        report = Some(r);
+        break;
+    }
+    let mut report = report.ok_or_else(|| {
+        SkillError::NotHeld(format!(
+            "no grasp of `{name}` in {} attempts: {disturbed}",
+            settings.attempts
         ))
     })?;
-    let mut report = GraspReport {
-        candidate: candidate.clone(),
-        rejected,
-        approach: plan.report.clone(),
-        lift: None,
-        lifted: 0.0,
-    };
-    if settings.dry_run {
-        return Ok(report);
-    }
-    world.gripper_open(arm.robot())?;
-    report.approach = arm.execute(world, &plan, execution)?;
-    let approach = LinearMove {
-        speed: settings.speed,
-        force_limit: 30.0,
-        ignore: bodies.clone(),
-        ..LinearMove::new(candidate.approach, settings.approach)
-    };
-    arm.move_linear(world, &approach, execution)?;
     world.gripper_close(arm.robot(), settings.force)?;
     let dt = world.config().control_dt();
     for _ in 0..(1.2 / dt).ceil() as usize {
@@ -457,6 +494,9 @@ fn check_settings(s: &GraspSettings) -> SkillResult<()> {
         if !x.is_finite() || x < 0.0 {
             return Err(SkillError::BadInput(format!("grasp {what} {x} must be non-negative")));
         }
+    }
+    if s.attempts == 0 {
+        return Err(SkillError::BadInput("grasp attempts must be at least 1".into()));
     }
     if !s.side && !s.top {
         return Err(SkillError::BadInput(

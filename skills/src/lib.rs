@@ -22,6 +22,7 @@ pub mod arm;
 pub mod error;
 pub mod execution;
 pub mod grasp;
+pub mod place;
 pub mod push;
 
 pub use arm::{Arm, ArmSettings, ArmTarget};

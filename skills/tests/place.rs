@@ -1,0 +1,124 @@
+//! Placing: the Fetch grasps a mug and puts it down at another spot on the table.
+
+use hearth_sim::assets::{Asset, Category};
+use hearth_sim::kinematics::RobotModel;
+use hearth_sim::scene::{SceneFile, SceneObject};
+use hearth_sim::world::{ModelHandle, SpawnOptions, World, WorldConfig};
+use hearth_skills::arm::{Arm, ArmSettings};
+use hearth_skills::grasp::{GraspSettings, grasp};
+use hearth_skills::place::{PlaceSettings, PlaceTarget, place};
+use hearth_skills::{Execution, SkillError};
+use nalgebra::Isometry3;
+use rand::SeedableRng;
+
+const TABLE_X: f64 = 1.05;
+
+fn table_scene() -> (World, ModelHandle, ModelHandle, ModelHandle, f64) {
+    let top = Asset::build(Category::Table, 0, 1.0).unwrap().aabb_max[2];
+    let mut scene = SceneFile::empty("mug on a table");
+    scene
+        .objects
+        .push(SceneObject::new("table", "table", 0, [TABLE_X, 0.0, 0.0]));
+    let mut mug = SceneObject::new("mug", "mug", 0, [TABLE_X - 0.25, 0.0, top]);
+    mug.on = Some("table".into());
+    scene.objects.push(mug);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())
+        .unwrap();
+    world.tuck(robot).unwrap();
+    world.settle(120);
+    let (table, mug) = (loaded.object("table").unwrap(), loaded.object("mug").unwrap());
+    (world, robot, table, mug, top)
+}
+
+#[test]
+fn the_mug_is_put_down_at_another_spot_on_the_table() {
+    let (mut world, robot, table, mug, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    // Placing with nothing held is refused.
+    let anywhere = PlaceTarget::on_top_of(&world, table).unwrap();
+    let e = place(
+        &mut world,
+        &mut arm,
+        &anywhere,
+        &PlaceSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap_err();
+    assert!(matches!(e, SkillError::NotHeld(_)), "{e}");
+
+    grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap();
+    // A strip of the table to the robot's right, away from where the mug stood.
+    let target = PlaceTarget {
+        min: [TABLE_X - 0.35, -0.35],
+        max: [TABLE_X - 0.15, -0.15],
+        ..anywhere.clone()
+    };
+    assert!((target.z - top).abs() < 0.01);
+    let hash = world.state_hash();
+    let dry = PlaceSettings {
+        dry_run: true,
+        ..Default::default()
+    };
+    let plan = place(&mut world, &mut arm, &target, &dry, Execution::Physics, &mut rng).unwrap();
+    assert_eq!(world.state_hash(), hash);
+    assert!(arm.held().is_some());
+    let y = plan.planned.translation.y;
+    assert!((-0.35..=-0.15).contains(&y), "{plan:?}");
+
+    let r = place(
+        &mut world,
+        &mut arm,
+        &target,
+        &PlaceSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap();
+    assert!(arm.held().is_none());
+    let rest = world.base_pose(mug).unwrap().translation;
+    assert!(rest.y < -0.12 && rest.y > -0.38, "the mug rests at {rest:?}: {r:?}");
+    assert!(
+        (rest.z - top).abs() < 0.02,
+        "the mug rests at height {:.3} (table {top:.3})",
+        rest.z
+    );
+    let up = world.base_pose(mug).unwrap().rotation * nalgebra::Vector3::z();
+    assert!(up.z > 0.95, "the mug tipped over: {up:?}");
+}
+
+#[test]
+fn bad_regions_are_typed_errors() {
+    let (mut world, robot, _, _, _) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    let empty = PlaceTarget {
+        z: 0.7,
+        min: [1.0, 0.0],
+        max: [0.5, 0.1],
+        support: None,
+    };
+    let e = place(
+        &mut world,
+        &mut arm,
+        &empty,
+        &PlaceSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap_err();
+    assert!(matches!(e, SkillError::BadInput(_)), "{e}");
+}
