@@ -216,6 +216,60 @@ impl LinearMove {
     }
 }
 
+/// A move of the tip through world poses (e.g. along a door handle's arc).
+///
+/// ```
+/// use hearth_skills::arm::PoseMove;
+/// let m = PoseMove::new(vec![nalgebra::Isometry3::translation(0.6, 0.0, 0.9)]);
+/// assert_eq!(m.force_limit, 60.0);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseMove {
+    /// The tip poses, world frame, each a small step from the one before (the first a small
+    /// step from where the tip is).
+    pub poses: Vec<Isometry3<f64>>,
+    /// Time spent on each step, seconds.
+    pub step_time: f64,
+    /// Force limit on the arm, N (as for [`LinearMove`]).
+    pub force_limit: f64,
+    /// Bodies the move may touch.
+    pub ignore: Vec<BodyId>,
+    /// Whether the world's obstacles are checked (else only self-collision).
+    pub check_world: bool,
+}
+
+impl PoseMove {
+    /// 0.1 s per step, 60 N, checked against the world.
+    pub fn new(poses: Vec<Isometry3<f64>>) -> Self {
+        Self {
+            poses,
+            step_time: 0.1,
+            force_limit: 60.0,
+            ignore: Vec::new(),
+            check_world: true,
+        }
+    }
+}
+
+/// How a [`PoseMove`] ended.
+///
+/// ```
+/// assert_eq!(hearth_skills::arm::PoseReport::default().planned, 0);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PoseReport {
+    /// Poses the IK path reaches (a prefix of the requested ones).
+    pub planned: usize,
+    /// Poses requested.
+    pub requested: usize,
+    /// Largest contact force on the arm seen (N).
+    pub peak_force: f64,
+    /// Whether the force limit stopped the move.
+    pub stopped_by_force: bool,
+    /// Simulated time taken, seconds.
+    pub duration: f64,
+}
+
 /// How a straight-line move ended.
 ///
 /// ```
@@ -843,38 +897,145 @@ impl Arm {
             )));
         }
         let base = world.base_pose(self.robot)?;
-        let dir = base.inverse_transform_vector(&(m.direction / n));
-        let mut validity = if m.check_world {
-            self.validity(world, &m.ignore, 0.0)?
+        let start_pose = base * self.start_tool_pose(world)?;
+        let dir = m.direction / n;
+        let steps = (m.distance / m.step).ceil().max(1.0) as usize;
+        let targets: Vec<Isometry3<f64>> = (1..=steps)
+            .map(|i| {
+                let s = m.distance * i as f64 / steps as f64;
+                Isometry3::from_parts(
+                    Translation3::from(start_pose.translation.vector + dir * s),
+                    start_pose.rotation,
+                )
+            })
+            .collect();
+        let states = self.ik_path(world, &targets, &m.ignore, m.check_world)?;
+        let covered = m.distance * (states.len() - 1) as f64 / steps as f64;
+        Ok((states, covered))
+    }
+
+    /// The tool pose of the current configuration in the robot's root frame.
+    fn start_tool_pose(&self, world: &World) -> SkillResult<Isometry3<f64>> {
+        let mut ik = self.ik(world, 1)?;
+        let (_, start) = self.configuration(world)?;
+        Ok(ik.tool_pose(&start)?)
+    }
+
+    /// Chain configurations through world tip poses by IK steps from the current
+    /// configuration (the first state), cut short before the first step whose solution fails,
+    /// jumps (> 0.2 rad in a joint) or collides.
+    fn ik_path(
+        &self,
+        world: &World,
+        targets: &[Isometry3<f64>],
+        ignore: &[BodyId],
+        check_world: bool,
+    ) -> SkillResult<Vec<Vec<f64>>> {
+        let base = world.base_pose(self.robot)?;
+        let mut validity = if check_world {
+            self.validity(world, ignore, 0.0)?
         } else {
             self.checker(world, Arc::new(ParryScene::new(Vec::new())))?
         };
         let mut ik = self.ik(world, 1)?;
         let (_, start) = self.configuration(world)?;
-        let start_pose = ik.tool_pose(&start)?;
-        let steps = (m.distance / m.step).ceil().max(1.0) as usize;
         let mut states = vec![start];
-        let mut covered = 0.0;
         let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(0);
-        for i in 1..=steps {
-            let s = m.distance * i as f64 / steps as f64;
-            let target = Isometry3::from_parts(
-                Translation3::from(start_pose.translation.vector + dir * s),
-                start_pose.rotation,
-            );
+        for target in targets {
+            check_finite_pose(target)?;
             let prev = states.last().cloned().unwrap_or_default();
-            let solved = ik.solve_with(&IkTarget::Pose(target), &prev, &mut rng, |q| {
+            let solved = ik.solve_with(&IkTarget::Pose(base.inverse() * target), &prev, &mut rng, |q| {
                 q.iter().zip(&prev).all(|(a, b)| (a - b).abs() < 0.2) && validity.is_valid(q)
             });
             match solved {
-                Ok(sol) => {
-                    states.push(sol.q);
-                    covered = s;
-                }
+                Ok(sol) => states.push(sol.q),
                 Err(_) => break,
             }
         }
-        Ok((states, covered))
+        Ok(states)
+    }
+
+    /// Moves the tip through world poses (small steps apart; a door handle's arc, a drawer's
+    /// pull) spending `m.step_time` on each, stopping early where the IK path ends or the
+    /// contact force on the arm passes `m.force_limit`.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
+    /// the first step is possible.
+    pub fn move_through(&mut self, world: &mut World, m: &PoseMove, execution: Execution) -> SkillResult<PoseReport> {
+        if m.poses.is_empty() || !m.step_time.is_finite() || m.step_time <= 0.0 || !(m.force_limit > 0.0) {
+            return Err(SkillError::BadInput(format!(
+                "pose move of {} poses, {} s per step, force limit {} is unusable",
+                m.poses.len(),
+                m.step_time,
+                m.force_limit
+            )));
+        }
+        let states = self.ik_path(world, &m.poses, &m.ignore, m.check_world)?;
+        if states.len() < 2 {
+            return Err(SkillError::Unreachable(
+                "not even the first pose of the move is reachable".into(),
+            ));
+        }
+        let (peak_force, stopped_by_force, duration) =
+            self.run_states(world, &states, m.step_time, m.force_limit, execution)?;
+        Ok(PoseReport {
+            planned: states.len() - 1,
+            requested: m.poses.len(),
+            peak_force,
+            stopped_by_force,
+            duration,
+        })
+    }
+
+    /// Executes chain states `segment` seconds apart (linear in between); returns the peak
+    /// arm force, whether the force limit stopped it, and the simulated time taken.
+    fn run_states(
+        &mut self,
+        world: &mut World,
+        states: &[Vec<f64>],
+        segment: f64,
+        force_limit: f64,
+        execution: Execution,
+    ) -> SkillResult<(f64, bool, f64)> {
+        let dt = world.config().control_dt();
+        let duration = segment * (states.len() - 1) as f64;
+        let steps = (duration / dt).ceil() as usize;
+        let support = self.support_bodies(world)?;
+        let commands = world.joint_commands(self.robot)?.to_vec();
+        let (mut full, _) = self.configuration(world)?;
+        let mut q = vec![0.0; self.chain.dof()];
+        let turns = self.turns(world, &states[0])?;
+        let t0 = world.time();
+        let (mut over, mut peak, mut stopped) = (0, 0.0_f64, false);
+        for k in 1..=steps + self.settings.settle_steps / 2 {
+            let t = (k as f64 * dt).min(duration) / segment;
+            let i = (t.floor() as usize).min(states.len() - 2);
+            let f = (t - i as f64).clamp(0.0, 1.0);
+            for (j, x) in q.iter_mut().enumerate() {
+                *x = states[i][j] + f * (states[i + 1][j] - states[i][j]);
+            }
+            self.unwrap_to(&mut q, &turns);
+            match execution {
+                Execution::Physics => self.command(world, &q)?,
+                Execution::Kinematic => {
+                    self.chain.scatter(&q, &mut full);
+                    world.reset_configuration(self.robot, &full)?;
+                    self.restore_commands(world, &commands)?;
+                    self.carry_held(world)?;
+                }
+            }
+            world.step();
+            let force = self.arm_force(world, &support)?;
+            peak = peak.max(force);
+            over = if force > force_limit { over + 1 } else { 0 };
+            if over >= 2 {
+                stopped = true;
+                self.hold_here(world)?;
+                break;
+            }
+        }
+        Ok((peak, stopped, world.time() - t0))
     }
 
     /// Moves the tip along a straight line (orientation kept) at `m.speed`, stopping at the
@@ -898,51 +1059,16 @@ impl Arm {
         }
         let start_tip = self.tip_pose(world)?.translation.vector;
         let dir = m.direction.normalize();
-        let dt = world.config().control_dt();
         let segment = planned / (states.len() - 1) as f64 / m.speed;
-        let duration = segment * (states.len() - 1) as f64;
-        let steps = (duration / dt).ceil() as usize;
-        let support = self.support_bodies(world)?;
-        let commands = world.joint_commands(self.robot)?.to_vec();
-        let (mut full, _) = self.configuration(world)?;
-        let mut q = vec![0.0; self.chain.dof()];
-        let turns = self.turns(world, &states[0])?;
-        let mut report = LinearReport {
+        let (peak_force, stopped_by_force, duration) =
+            self.run_states(world, &states, segment, m.force_limit, execution)?;
+        Ok(LinearReport {
             planned,
-            ..Default::default()
-        };
-        let t0 = world.time();
-        let mut over = 0;
-        for k in 1..=steps + self.settings.settle_steps / 2 {
-            let t = (k as f64 * dt).min(duration) / segment;
-            let i = (t.floor() as usize).min(states.len() - 2);
-            let f = (t - i as f64).clamp(0.0, 1.0);
-            for (j, x) in q.iter_mut().enumerate() {
-                *x = states[i][j] + f * (states[i + 1][j] - states[i][j]);
-            }
-            self.unwrap_to(&mut q, &turns);
-            match execution {
-                Execution::Physics => self.command(world, &q)?,
-                Execution::Kinematic => {
-                    self.chain.scatter(&q, &mut full);
-                    world.reset_configuration(self.robot, &full)?;
-                    self.restore_commands(world, &commands)?;
-                    self.carry_held(world)?;
-                }
-            }
-            world.step();
-            let force = self.arm_force(world, &support)?;
-            report.peak_force = report.peak_force.max(force);
-            over = if force > m.force_limit { over + 1 } else { 0 };
-            if over >= 2 {
-                report.stopped_by_force = true;
-                self.hold_here(world)?;
-                break;
-            }
-        }
-        report.travelled = (self.tip_pose(world)?.translation.vector - start_tip).dot(&dir);
-        report.duration = world.time() - t0;
-        Ok(report)
+            travelled: (self.tip_pose(world)?.translation.vector - start_tip).dot(&dir),
+            peak_force,
+            stopped_by_force,
+            duration,
+        })
     }
 }
 

@@ -19,6 +19,7 @@ pub use hearth_planning as planning;
 pub use hearth_sim as sim;
 
 pub mod arm;
+pub mod articulated;
 pub mod error;
 pub mod execution;
 pub mod grasp;
