@@ -236,6 +236,9 @@ pub struct PoseMove {
     pub ignore: Vec<BodyId>,
     /// Whether the world's obstacles are checked (else only self-collision).
     pub check_world: bool,
+    /// A line in the tip frame (point, direction) the tip may turn about to stay reachable:
+    /// the long axis of a pinched handle bar.
+    pub free_axis: Option<(Point3<f64>, Vector3<f64>)>,
 }
 
 impl PoseMove {
@@ -247,6 +250,7 @@ impl PoseMove {
             force_limit: 60.0,
             ignore: Vec::new(),
             check_world: true,
+            free_axis: None,
         }
     }
 }
@@ -909,7 +913,7 @@ impl Arm {
                 )
             })
             .collect();
-        let states = self.ik_path(world, &targets, &m.ignore, m.check_world)?;
+        let states = self.ik_path(world, &targets, &m.ignore, m.check_world, None)?;
         let covered = m.distance * (states.len() - 1) as f64 / steps as f64;
         Ok((states, covered))
     }
@@ -923,13 +927,15 @@ impl Arm {
 
     /// Chain configurations through world tip poses by IK steps from the current
     /// configuration (the first state), cut short before the first step whose solution fails,
-    /// jumps (> 0.2 rad in a joint) or collides.
+    /// jumps (> 0.2 rad in a joint) or collides. With a free axis (a point and direction in the
+    /// tip frame), each step may also turn the tip about it.
     fn ik_path(
         &self,
         world: &World,
         targets: &[Isometry3<f64>],
         ignore: &[BodyId],
         check_world: bool,
+        free_axis: Option<&(Point3<f64>, Vector3<f64>)>,
     ) -> SkillResult<Vec<Vec<f64>>> {
         let base = world.base_pose(self.robot)?;
         let mut validity = if check_world {
@@ -937,20 +943,46 @@ impl Arm {
         } else {
             self.checker(world, Arc::new(ParryScene::new(Vec::new())))?
         };
+        // One attempt from the previous step (a restart would jump), patient enough to creep
+        // along a joint limit.
         let mut ik = self.ik(world, 1)?;
+        ik.set_settings(IkSettings {
+            max_iterations: 150,
+            stall_iterations: 150,
+            position_tolerance: 0.002,
+            orientation_tolerance: 0.02,
+            ..ik.settings().clone()
+        });
         let (_, start) = self.configuration(world)?;
         let mut states = vec![start];
         let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(0);
-        for target in targets {
+        // Turns about the free axis tried at each step, relative to the last one taken.
+        const WIGGLE: [f64; 7] = [0.0, 0.1, -0.1, 0.25, -0.25, 0.5, -0.5];
+        let tries: &[f64] = if free_axis.is_some() { &WIGGLE } else { &WIGGLE[..1] };
+        let mut turned = 0.0;
+        'steps: for target in targets {
             check_finite_pose(target)?;
             let prev = states.last().cloned().unwrap_or_default();
-            let solved = ik.solve_with(&IkTarget::Pose(base.inverse() * target), &prev, &mut rng, |q| {
-                q.iter().zip(&prev).all(|(a, b)| (a - b).abs() < 0.2) && validity.is_valid(q)
-            });
-            match solved {
-                Ok(sol) => states.push(sol.q),
-                Err(_) => break,
+            for &d in tries {
+                let turn = match free_axis {
+                    Some((p, axis)) => {
+                        let r = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(*axis), turned + d);
+                        Isometry3::from_parts(Translation3::from(p.coords), r)
+                            * Isometry3::from_parts(Translation3::from(-p.coords), UnitQuaternion::identity())
+                    }
+                    None => Isometry3::identity(),
+                };
+                let goal = IkTarget::Pose(base.inverse() * target * turn);
+                let solved = ik.solve_with(&goal, &prev, &mut rng, |q| {
+                    q.iter().zip(&prev).all(|(a, b)| (a - b).abs() < 0.2) && validity.is_valid(q)
+                });
+                if let Ok(sol) = solved {
+                    states.push(sol.q);
+                    turned += d;
+                    continue 'steps;
+                }
             }
+            break;
         }
         Ok(states)
     }
@@ -971,7 +1003,7 @@ impl Arm {
                 m.force_limit
             )));
         }
-        let states = self.ik_path(world, &m.poses, &m.ignore, m.check_world)?;
+        let states = self.ik_path(world, &m.poses, &m.ignore, m.check_world, m.free_axis.as_ref())?;
         if states.len() < 2 {
             return Err(SkillError::Unreachable(
                 "not even the first pose of the move is reachable".into(),

@@ -288,9 +288,18 @@ pub fn move_joint<R: Rng + ?Sized>(
         _ => {
             let middle = shape.shape.compute_aabb(&to_pose(&shape_pose)).center();
             let middle = Point3::new(middle.x as f64, middle.y as f64, middle.z as f64);
-            axis.cross(&(middle - hinge))
+            let swing = axis
+                .cross(&(middle - hinge))
                 .try_normalize(1e-9)
-                .ok_or_else(|| SkillError::BadInput(format!("link `{link_name}` lies on its hinge axis")))?
+                .ok_or_else(|| SkillError::BadInput(format!("link `{link_name}` lies on its hinge axis")))?;
+            // The middle sits a little in front of the hinge, so its swing leans off the leaf's
+            // normal: snap it to the nearest axis of the link frame (leaves are built square).
+            let frame = [Vector3::x(), Vector3::y(), Vector3::z()].map(|e| link_pose.rotation * e);
+            frame
+                .iter()
+                .flat_map(|e| [*e, -*e])
+                .max_by(|a, b| a.dot(&swing).total_cmp(&b.dot(&swing)))
+                .unwrap_or(swing)
         }
     };
     let handle = find_handle(&shape.shape, &shape_pose, &out)
@@ -398,7 +407,12 @@ pub fn move_joint<R: Rng + ?Sized>(
         JointKind::Prismatic => travel.abs(),
         _ => travel.abs() * radius,
     };
+    // The pinched bar's long axis (across both the approach and the finger axis), through
+    // the pads' centre: turning about it keeps the grip.
+    let bar = tip.inverse() * handle.centre;
+    let free_axis = Some((Point3::new(bar.x, bar.y, 0.0), Vector3::z()));
     let motion = PoseMove {
+        free_axis,
         step_time: length / steps as f64 / settings.speed,
         force_limit: settings.force_limit,
         ignore: vec![body],
@@ -421,9 +435,18 @@ pub fn move_joint<R: Rng + ?Sized>(
     report.end = world.joint_positions(object)?[v];
     let done = (report.end - start) / (target - start);
     if done < settings.min_fraction {
+        let m = report.motion.as_ref();
         return Err(SkillError::NoEffect(format!(
-            "joint `{joint}` of `{name}` moved from {start:.3} to {:.3} of the asked {target:.3}",
-            report.end
+            "joint `{joint}` of `{name}` moved from {start:.3} to {:.3} of the asked {target:.3} \
+             (the tip followed {} of {} steps{})",
+            report.end,
+            m.map_or(0, |m| m.planned),
+            m.map_or(0, |m| m.requested),
+            if m.is_some_and(|m| m.stopped_by_force) {
+                ", stopped by the force limit"
+            } else {
+                ""
+            }
         )));
     }
     Ok(report)

@@ -140,3 +140,43 @@ fn bad_joints_are_typed_errors() {
     .unwrap_err();
     assert!(matches!(e, SkillError::BadInput(_)), "{e}");
 }
+
+#[test]
+fn the_fetch_swings_a_cabinet_door_open_along_its_arc() {
+    let mut scene = SceneFile::empty("two-door cabinet in front of a fetch");
+    // Closer than the drawer cabinet: the handle sits lower, and the leaf swings towards the robot.
+    let mut cabinet = SceneObject::new("cabinet", "bottom_cabinet", 0, [CABINET_X - 0.2, 0.0, 0.0]);
+    cabinet.orientation = Orientation::Yaw(std::f64::consts::PI);
+    cabinet.fixed = true;
+    scene.objects.push(cabinet);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())
+        .unwrap();
+    world.tuck(robot).unwrap();
+    let cabinet = loaded.object("cabinet").unwrap();
+    let joints = world.model(cabinet).unwrap().variable_names().to_vec();
+    for joint in &joints {
+        world.set_joint_command(cabinet, joint, JointCommand::Off).unwrap();
+    }
+    world.settle(60);
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    let r = open(
+        &mut world,
+        &mut arm,
+        cabinet,
+        "door_0_hinge",
+        0.8,
+        &ArticulatedSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap();
+    assert!(r.end > 0.5, "{r:?}");
+    let model = world.model(cabinet).unwrap();
+    let v = model.variable_names().iter().position(|n| n == "door_0_hinge").unwrap();
+    assert!(world.joint_positions(cabinet).unwrap()[v] > 0.5);
+}
