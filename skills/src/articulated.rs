@@ -9,6 +9,9 @@
 //! in small IK steps with a force limit, lets go and backs off. The joint must end up moved by
 //! at least `min_fraction` of what was asked.
 //!
+//! With [`Execution::Kinematic`] the arm's joints are set along the motion and the furniture
+//! joint is set to follow the tip's progress at its end (teleported fingers drag nothing).
+//!
 //! Articulated objects spawned in a [`World`] hold their joints with position motors unless
 //! told otherwise (`World::set_joint_command(.., JointCommand::Off)` makes them passive); a
 //! held joint resists the robot and the skill reports [`SkillError::NoEffect`].
@@ -419,6 +422,16 @@ pub fn move_joint<R: Rng + ?Sized>(
         ..PoseMove::new(poses)
     };
     let moved = arm.move_through(world, &motion, execution);
+    if let (Execution::Kinematic, Ok(m)) = (execution, &moved) {
+        // Teleported fingers drag nothing by friction: the joint is set to follow the tip.
+        let commands = world.joint_commands(object)?.to_vec();
+        let mut q = world.joint_positions(object)?;
+        q[v] = start + travel * m.planned as f64 / m.requested.max(1) as f64;
+        world.reset_configuration(object, &q)?;
+        for (k, c) in commands.into_iter().enumerate() {
+            world.set_joint_command(object, &model.variable_names()[k], c)?;
+        }
+    }
     world.gripper_open(arm.robot())?;
     for _ in 0..(0.8 / dt).ceil() as usize {
         world.step();

@@ -180,3 +180,22 @@ fn the_fetch_swings_a_cabinet_door_open_along_its_arc() {
     let v = model.variable_names().iter().position(|n| n == "door_0_hinge").unwrap();
     assert!(world.joint_positions(cabinet).unwrap()[v] > 0.5);
 }
+
+#[test]
+fn kinematic_execution_opens_the_drawer_too() {
+    let (mut world, robot, cabinet) = cabinet_scene(0.0);
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    let r = open(
+        &mut world,
+        &mut arm,
+        cabinet,
+        JOINT,
+        0.25,
+        &ArticulatedSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    assert!(drawer(&world, cabinet) >= 0.15, "{r:?}");
+}

@@ -134,3 +134,22 @@ fn too_wide_objects_and_bad_settings_are_typed_errors() {
     let e = grasp(&mut world, &mut arm, mug, &bad, Execution::Physics, &mut rng).unwrap_err();
     assert!(matches!(e, SkillError::BadInput(_)), "{e}");
 }
+
+#[test]
+fn kinematic_execution_lifts_the_mug_too() {
+    let (mut world, robot, mug, _) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+    let z0 = world.base_pose(mug).unwrap().translation.z;
+    let r = grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    assert!(r.lifted > 0.07, "{r:?}");
+    assert!(world.base_pose(mug).unwrap().translation.z > z0 + 0.07);
+}

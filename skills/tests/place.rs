@@ -122,3 +122,38 @@ fn bad_regions_are_typed_errors() {
     .unwrap_err();
     assert!(matches!(e, SkillError::BadInput(_)), "{e}");
 }
+
+#[test]
+fn kinematic_execution_places_the_mug_too() {
+    let (mut world, robot, table, mug, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
+    grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    let target = PlaceTarget {
+        min: [TABLE_X - 0.35, 0.15],
+        max: [TABLE_X - 0.15, 0.35],
+        ..PlaceTarget::on_top_of(&world, table).unwrap()
+    };
+    place(
+        &mut world,
+        &mut arm,
+        &target,
+        &PlaceSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    let rest = world.base_pose(mug).unwrap().translation;
+    assert!(
+        rest.y > 0.12 && (rest.z - top).abs() < 0.02,
+        "the mug rests at {rest:?}"
+    );
+}

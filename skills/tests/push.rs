@@ -167,3 +167,25 @@ fn a_drawer_held_by_its_motor_stops_the_push_at_the_force_limit() {
     assert_eq!(e.reason(), "no_effect", "{e}");
     assert!((drawer_opening(&world, cabinet) - OPEN).abs() < 0.05);
 }
+
+#[test]
+fn kinematic_execution_closes_the_drawer_too() {
+    let (mut world, robot, cabinet) = cabinet_scene();
+    let mut cam = camera(&world, robot);
+    let (u, v) = drawer_pixel(&world, &cam, cabinet);
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+    let report = push_at_pixel(
+        &mut world,
+        &mut arm,
+        &mut cam,
+        u,
+        v,
+        &PushSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    let open = drawer_opening(&world, cabinet);
+    assert!(open < 0.1, "the drawer is still {open:.3} m open: {report:?}");
+}
