@@ -5,6 +5,12 @@
 //! [`SkillError`] with a [`SkillError::reason`] on failure; [`Execution`] chooses between
 //! controllers in physics (the default) and kinematic teleporting.
 //!
+//! Arm skills build on [`Arm`] ([`arm`]): collision-aware IK goals, BiRRT against the live
+//! world, parabolic shortcutting, jerk-limited (Ruckig) execution, straight-line and
+//! pose-following moves with a force limit. On top of it: [`push::push_at_pixel`] (ReLMoGen's
+//! push primitive), [`grasp::grasp`] and [`grasp::release`], [`place::place`], and
+//! [`articulated::open`] / [`articulated::close`] for drawers and doors.
+//!
 //! ```
 //! let locobot = hearth_skills::kinematics::RobotModel::builtin("locobot").unwrap();
 //! assert!(locobot.dof() > 0);
@@ -27,5 +33,9 @@ pub mod place;
 pub mod push;
 
 pub use arm::{Arm, ArmSettings, ArmTarget};
+pub use articulated::{ArticulatedSettings, close, open};
 pub use error::{SkillError, SkillResult};
 pub use execution::Execution;
+pub use grasp::{GraspSettings, grasp, release};
+pub use place::{PlaceSettings, PlaceTarget, place};
+pub use push::{PushSettings, push_at_pixel};

@@ -189,3 +189,30 @@ fn kinematic_execution_closes_the_drawer_too() {
     let open = drawer_opening(&world, cabinet);
     assert!(open < 0.1, "the drawer is still {open:.3} m open: {report:?}");
 }
+
+#[test]
+fn the_same_seed_gives_the_same_push() {
+    let (mut world, robot, cabinet) = cabinet_scene();
+    let start = world.snapshot();
+    let mut hashes = Vec::new();
+    for _ in 0..2 {
+        world.restore(&start).unwrap();
+        let mut cam = camera(&world, robot);
+        let (u, v) = drawer_pixel(&world, &cam, cabinet);
+        let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        push_at_pixel(
+            &mut world,
+            &mut arm,
+            &mut cam,
+            u,
+            v,
+            &PushSettings::default(),
+            Execution::Physics,
+            &mut rng,
+        )
+        .unwrap();
+        hashes.push(world.state_hash());
+    }
+    assert_eq!(hashes[0], hashes[1]);
+}
