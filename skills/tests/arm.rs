@@ -122,3 +122,25 @@ fn straight_line_moves_follow_the_line_and_stop_at_the_table() {
         Err(SkillError::BadInput(_))
     ));
 }
+
+#[test]
+fn an_obstacle_appearing_after_planning_is_reported_as_a_collision() {
+    let (mut world, robot, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let target = Point3::new(TABLE_X - 0.3, -0.1, top + 0.25);
+    let plan = arm
+        .plan(&world, &ArmTarget::Position(target), &[], &mut rng(4))
+        .unwrap();
+    // A crate dropped where the gripper is going, after the plan was made.
+    world
+        .add_box(
+            "crate",
+            [0.08, 0.08, 0.08],
+            &Isometry3::translation(target.x, target.y, target.z),
+            false,
+        )
+        .unwrap();
+    let e = arm.execute(&mut world, &plan, Execution::Physics).unwrap_err();
+    assert_eq!(e.reason(), "collision", "{e}");
+    assert!(e.to_string().contains("crate"), "{e}");
+}

@@ -157,3 +157,28 @@ fn kinematic_execution_places_the_mug_too() {
         "the mug rests at {rest:?}"
     );
 }
+
+#[test]
+fn asset_surfaces_become_world_regions() {
+    let mut scene = SceneFile::empty("counter");
+    let mut counter = SceneObject::new("counter", "counter", 1, [2.0, 1.0, 0.0]);
+    counter.orientation = hearth_sim::scene::Orientation::Yaw(std::f64::consts::FRAC_PI_2);
+    counter.fixed = true;
+    scene.objects.push(counter);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let counter = loaded.object("counter").unwrap();
+    let asset = Asset::build(Category::Counter, 1, 1.0).unwrap();
+    assert!(!asset.surfaces.is_empty());
+    for s in &asset.surfaces {
+        let t = PlaceTarget::from_surface(&world, counter, s).unwrap();
+        t.validate().unwrap();
+        assert!((t.z - s.z).abs() < 1e-6);
+        // Turned a quarter: the surface's x extent lies along world y.
+        assert!(
+            ((t.max[1] - t.min[1]) - (s.max[0] - s.min[0])).abs() < 1e-6,
+            "{t:?} {s:?}"
+        );
+        assert!(t.min[0] >= 2.0 - 0.8 && t.max[0] <= 2.0 + 0.8, "{t:?}");
+    }
+}
