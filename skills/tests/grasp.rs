@@ -153,3 +153,38 @@ fn kinematic_execution_lifts_the_mug_too() {
     assert!(r.lifted > 0.07, "{r:?}");
     assert!(world.base_pose(mug).unwrap().translation.z > z0 + 0.07);
 }
+
+#[test]
+fn a_mug_glued_to_the_table_is_reported_as_slipped() {
+    let table = Asset::build(Category::Table, 0, 1.0).unwrap();
+    let top = table.aabb_max[2];
+    let mut scene = SceneFile::empty("glued mug");
+    scene
+        .objects
+        .push(SceneObject::new("table", "table", 0, [TABLE_X, 0.0, 0.0]));
+    let mut mug = SceneObject::new("mug", "mug", 0, [TABLE_X - 0.25, 0.0, top]);
+    mug.fixed = true;
+    scene.objects.push(mug);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())
+        .unwrap();
+    world.tuck(robot).unwrap();
+    world.settle(60);
+    let mug = loaded.object("mug").unwrap();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+    let e = grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap_err();
+    assert_eq!(e.reason(), "slipped", "{e}");
+    assert!(arm.held().is_none());
+}
