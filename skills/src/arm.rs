@@ -113,6 +113,14 @@ pub enum ArmTarget {
 }
 
 /// An object held in the gripper: it moves with the tip and is checked like a link.
+///
+/// ```no_run
+/// # fn f(arm: &hearth_skills::Arm) {
+/// if let Some(held) = arm.held() {
+///     println!("holding {} at {:?} in the gripper frame", held.name, held.offset);
+/// }
+/// # }
+/// ```
 #[derive(Clone)]
 pub struct Held {
     /// The object's model.
@@ -164,6 +172,17 @@ pub struct MotionReport {
 }
 
 /// A planned motion, ready to execute.
+///
+/// ```no_run
+/// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+/// use hearth_skills::arm::ArmTarget;
+/// use rand::SeedableRng;
+/// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+/// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+/// assert!(plan.trajectory.duration() > 0.0 && !plan.report.executed);
+/// arm.execute(world, &plan, hearth_skills::Execution::Physics).unwrap();
+/// # }
+/// ```
 #[derive(Clone, Debug)]
 pub struct ArmPlan {
     /// The trajectory of the chain.
@@ -385,26 +404,58 @@ impl Arm {
     }
 
     /// The robot.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let robot = arm.robot();
+    /// assert!(world.model(robot).is_ok());
+    /// # }
+    /// ```
     pub fn robot(&self) -> ModelHandle {
         self.robot
     }
 
     /// The planned chain.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert_eq!(arm.chain().dof(), 8); // torso + 7 arm joints on the Fetch
+    /// # }
+    /// ```
     pub fn chain(&self) -> &Chain {
         &self.chain
     }
 
     /// The settings.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert_eq!(arm.settings().tip, "gripper_link");
+    /// # }
+    /// ```
     pub fn settings(&self) -> &ArmSettings {
         &self.settings
     }
 
     /// The held object, if any.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert!(arm.held().is_none());
+    /// # }
+    /// ```
     pub fn held(&self) -> Option<&Held> {
         self.held.as_ref()
     }
 
     /// Sets (or clears) the held object; it is attached to the tip for planning.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// arm.set_held(None);
+    /// assert!(arm.held().is_none());
+    /// # }
+    /// ```
     pub fn set_held(&mut self, held: Option<Held>) {
         self.held = held;
     }
@@ -414,6 +465,13 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::BadInput`] for an unknown joint or a value outside its limits.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// arm.assume_joints(&[("r_gripper_finger_joint", 0.05)]).unwrap();
+    /// arm.assume_joints(&[]).unwrap();
+    /// # }
+    /// ```
     pub fn assume_joints(&mut self, joints: &[(&str, f64)]) -> SkillResult<()> {
         let model = self.chain.model();
         let mut assume = Vec::with_capacity(joints.len());
@@ -447,6 +505,13 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let tip = arm.tip_pose(world).unwrap();
+    /// assert!(tip.translation.z > 0.0);
+    /// # }
+    /// ```
     pub fn tip_pose(&self, world: &World) -> SkillResult<Isometry3<f64>> {
         Ok(world.link_pose(self.robot, &self.settings.tip)?)
     }
@@ -457,6 +522,14 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let (full, chain) = arm.configuration(world).unwrap();
+    /// assert_eq!(chain.len(), arm.chain().dof());
+    /// assert!(full.len() > chain.len());
+    /// # }
+    /// ```
     pub fn configuration(&self, world: &World) -> SkillResult<(Vec<f64>, Vec<f64>)> {
         let model = self.chain.model();
         let mut q = world.joint_positions(self.robot)?;
@@ -477,6 +550,13 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let under = arm.support_bodies(world).unwrap();
+    /// assert!(under.contains(&world.ground().unwrap()));
+    /// # }
+    /// ```
     pub fn support_bodies(&self, world: &World) -> SkillResult<Vec<BodyId>> {
         let mut under: Vec<BodyId> = world
             .contacts(self.robot)?
@@ -496,6 +576,15 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::planning::StateValidator;
+    /// let mut v = arm.validity(world, &[], 0.01).unwrap();
+    /// let (_, q) = arm.configuration(world).unwrap();
+    /// assert!(v.is_valid(&q));
+    /// # }
+    /// ```
     pub fn validity(&self, world: &World, ignore: &[BodyId], margin: f32) -> SkillResult<RobotValidity> {
         let mut skip = self.support_bodies(world)?;
         skip.extend_from_slice(ignore);
@@ -549,6 +638,17 @@ impl Arm {
     /// # Errors
     /// [`SkillError::BadInput`] for a malformed target; [`SkillError::IkFailed`] when no
     /// collision-free solution is found; [`SkillError::Unreachable`] for joints in collision.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let mut v = arm.validity(world, &[], 0.01).unwrap();
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let goals = arm.goal_configurations(world, &target, &mut v, &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(!goals.is_empty());
+    /// # }
+    /// ```
     pub fn goal_configurations<R: Rng + ?Sized>(
         &self,
         world: &World,
@@ -601,6 +701,16 @@ impl Arm {
     /// # Errors
     /// [`SkillError::IkFailed`], [`SkillError::PlanningFailed`] (e.g. the start in collision,
     /// naming the contact), [`SkillError::PlanningTimeout`], [`SkillError::BadInput`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(plan.report.path_length > 0.0);
+    /// # }
+    /// ```
     pub fn plan<R: Rng + ?Sized>(
         &self,
         world: &World,
@@ -665,6 +775,16 @@ impl Arm {
     ///
     /// # Errors
     /// As [`Arm::plan`] and [`Arm::execute`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let r = arm.move_to(world, &target, hearth_skills::Execution::Kinematic, &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(r.executed);
+    /// # }
+    /// ```
     pub fn move_to<R: Rng + ?Sized>(
         &mut self,
         world: &mut World,
@@ -685,6 +805,17 @@ impl Arm {
     /// `contact_force` (the arm stops where it is); [`SkillError::Slipped`] when a held object
     /// leaves the gripper; [`SkillError::NotFinished`] when the final joint error exceeds the
     /// tolerance.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// let r = arm.execute(world, &plan, hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.tracking_error < 0.05);
+    /// # }
+    /// ```
     pub fn execute(&mut self, world: &mut World, plan: &ArmPlan, execution: Execution) -> SkillResult<MotionReport> {
         let mut report = plan.report.clone();
         let dt = world.config().control_dt();
@@ -881,6 +1012,14 @@ impl Arm {
     ///
     /// # Errors
     /// [`SkillError::BadInput`] for a zero or non-finite direction or distance.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::LinearMove;
+    /// let (states, covered) = arm.linear_path(world, &LinearMove::new(nalgebra::Vector3::z(), 0.1)).unwrap();
+    /// assert!(states.len() >= 1 && covered <= 0.1);
+    /// # }
+    /// ```
     pub fn linear_path(&self, world: &World, m: &LinearMove) -> SkillResult<(Vec<Vec<f64>>, f64)> {
         let n = m.direction.norm();
         if !n.is_finite() || n < 1e-9 {
@@ -994,6 +1133,16 @@ impl Arm {
     /// # Errors
     /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
     /// the first step is possible.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::PoseMove;
+    /// let tip = arm.tip_pose(world).unwrap();
+    /// let poses = (1..=10).map(|k| nalgebra::Isometry3::translation(0.0, 0.0, 0.01 * k as f64) * tip).collect();
+    /// let r = arm.move_through(world, &PoseMove::new(poses), hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.planned <= r.requested);
+    /// # }
+    /// ```
     pub fn move_through(&mut self, world: &mut World, m: &PoseMove, execution: Execution) -> SkillResult<PoseReport> {
         if m.poses.is_empty() || !m.step_time.is_finite() || m.step_time <= 0.0 || !(m.force_limit > 0.0) {
             return Err(SkillError::BadInput(format!(
@@ -1076,6 +1225,15 @@ impl Arm {
     /// # Errors
     /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
     /// the first IK step is possible.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::LinearMove;
+    /// let up = LinearMove::new(nalgebra::Vector3::z(), 0.1);
+    /// let r = arm.move_linear(world, &up, hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.travelled <= 0.11);
+    /// # }
+    /// ```
     pub fn move_linear(
         &mut self,
         world: &mut World,

@@ -71,6 +71,12 @@ impl Default for ArticulatedSettings {
 }
 
 /// What opening or closing did.
+///
+/// ```no_run
+/// # fn f(r: hearth_skills::articulated::ArticulatedReport) {
+/// println!("`{}` moved from {:.2} to {:.2} (asked {:.2})", r.joint, r.start, r.end, r.target);
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArticulatedReport {
     /// The joint moved.

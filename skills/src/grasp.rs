@@ -32,6 +32,13 @@ pub enum GraspKind {
 }
 
 /// One way to grasp an object.
+///
+/// ```no_run
+/// # fn f(c: hearth_skills::grasp::GraspCandidate) {
+/// // The tip's approach axis (+x) is the candidate's approach direction.
+/// assert!((c.pose.rotation * nalgebra::Vector3::x() - c.approach).norm() < 1e-9);
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct GraspCandidate {
     /// Side or top.
@@ -98,6 +105,12 @@ impl Default for GraspSettings {
 }
 
 /// What a grasp did.
+///
+/// ```no_run
+/// # fn f(r: hearth_skills::grasp::GraspReport) {
+/// println!("{:?} grasp, lifted {:.2} m after {:.1} s of approach", r.candidate.kind, r.lifted, r.approach.duration);
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct GraspReport {
     /// The candidate used.

@@ -39,7 +39,16 @@ pub struct PlaceTarget {
 }
 
 impl PlaceTarget {
-    /// The top of `model`'s root collision shape: its bounding box's top face, shrunk by 2 cm.
+    /// The top of `model`'s root collision shape: its bounding box's top face, shrunk by 2 cm
+    /// (for tables and boxes; furniture with parts above its top, such as a counter's tap,
+    /// should use [`PlaceTarget::from_surface`]).
+    ///
+    /// ```no_run
+    /// # fn f(world: &hearth_sim::world::World, table: hearth_sim::world::ModelHandle) {
+    /// let t = hearth_skills::place::PlaceTarget::on_top_of(world, table).unwrap();
+    /// assert!(t.z > 0.5);
+    /// # }
+    /// ```
     ///
     /// # Errors
     /// [`SkillError::BadInput`] for a model without collision geometry.
@@ -61,6 +70,15 @@ impl PlaceTarget {
 
     /// An asset surface of `model` (asset frame) in the world, as the bounding rectangle of its
     /// corners under the model's pose.
+    ///
+    /// ```no_run
+    /// # fn f(world: &hearth_sim::world::World, counter: hearth_sim::world::ModelHandle) {
+    /// use hearth_sim::assets::{Asset, Category};
+    /// let asset = Asset::build(Category::Counter, 0, 1.0).unwrap();
+    /// let t = hearth_skills::place::PlaceTarget::from_surface(world, counter, &asset.surfaces[0]).unwrap();
+    /// assert!(t.validate().is_ok());
+    /// # }
+    /// ```
     ///
     /// # Errors
     /// [`SkillError::World`] for an unknown model.
@@ -142,6 +160,13 @@ impl Default for PlaceSettings {
 }
 
 /// What a placement did.
+///
+/// ```no_run
+/// # fn f(r: hearth_skills::place::PlaceReport) {
+/// let off = (r.rest.translation.vector - r.planned.translation.vector).norm();
+/// assert!(off < 0.05);
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlaceReport {
     /// The planned pose of the object at release.

@@ -58,6 +58,12 @@ impl Default for PushSettings {
 }
 
 /// What a push did.
+///
+/// ```no_run
+/// # fn f(r: hearth_skills::push::PushReport) {
+/// println!("pushed `{}` at {:?}: it moved {:.2} m", r.body_name, r.point, r.moved);
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct PushReport {
     /// The pushed point, world frame.
