@@ -374,7 +374,8 @@ impl Arm {
             || !positive(settings.plan_time)
             || !positive(settings.contact_force)
             || !positive(settings.tolerance)
-            || !(settings.velocity_scale > 0.0 && settings.velocity_scale <= 1.0)
+            || !(0.0..=1.0).contains(&settings.velocity_scale)
+            || settings.velocity_scale == 0.0
             || !(settings.margin.is_finite() && settings.margin >= 0.0)
             || settings.plan_iterations == 0
             || settings.ik_attempts == 0
@@ -1144,7 +1145,12 @@ impl Arm {
     /// # }
     /// ```
     pub fn move_through(&mut self, world: &mut World, m: &PoseMove, execution: Execution) -> SkillResult<PoseReport> {
-        if m.poses.is_empty() || !m.step_time.is_finite() || m.step_time <= 0.0 || !(m.force_limit > 0.0) {
+        if m.poses.is_empty()
+            || !m.step_time.is_finite()
+            || m.step_time <= 0.0
+            || !m.force_limit.is_finite()
+            || m.force_limit <= 0.0
+        {
             return Err(SkillError::BadInput(format!(
                 "pose move of {} poses, {} s per step, force limit {} is unusable",
                 m.poses.len(),

@@ -485,7 +485,7 @@ fn check_settings(s: &ArticulatedSettings) -> SkillResult<()> {
             return Err(SkillError::BadInput(format!("{what} {x} must be positive")));
         }
     }
-    if !(s.min_fraction > 0.0 && s.min_fraction <= 1.0) {
+    if !(0.0..=1.0).contains(&s.min_fraction) || s.min_fraction == 0.0 {
         return Err(SkillError::BadInput(format!(
             "minimum fraction {} must be in (0, 1]",
             s.min_fraction
