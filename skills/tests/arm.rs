@@ -144,3 +144,26 @@ fn an_obstacle_appearing_after_planning_is_reported_as_a_collision() {
     assert_eq!(e.reason(), "collision", "{e}");
     assert!(e.to_string().contains("crate"), "{e}");
 }
+
+#[test]
+fn a_free_base_fetch_on_the_floor_moves_its_arm_too() {
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::translation(0.0, 0.0, 0.01), SpawnOptions::free())
+        .unwrap();
+    world.tuck(robot).unwrap();
+    world.settle(90);
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let base = world.base_pose(robot).unwrap();
+    let target = base * Point3::new(0.6, 0.2, 0.9);
+    arm.move_to(
+        &mut world,
+        &ArmTarget::Position(target),
+        Execution::Physics,
+        &mut rng(6),
+    )
+    .unwrap();
+    let tip = arm.tip_pose(&world).unwrap().translation.vector;
+    assert!((tip - target.coords).norm() < 0.04, "{tip:?} vs {target:?}");
+}
