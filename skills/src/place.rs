@@ -4,9 +4,10 @@
 //! A placement keeps the object upright (its current orientation, turned about the vertical by
 //! a sampled yaw) with its bottom `clearance` above the surface and its footprint inside the
 //! surface, clear of everything else on it. Surfaces are rectangles in the world frame: the top
-//! of a model ([`PlaceTarget::on_top_of`]) or any region, such as an asset's
-//! [`Surface`](hearth_sim::assets::Surface) (a shelf, a sink's basin) posed in the world
-//! ([`PlaceTarget::from_surface`]).
+//! of a model ([`PlaceTarget::on_top_of`]), every free top face of its collision parts (a
+//! worktop, a shelf, the floor of a sink's basin: [`PlaceTarget::surfaces_of`]), an asset's
+//! [`Surface`](hearth_sim::assets::Surface) posed in the world ([`PlaceTarget::from_surface`]),
+//! or any rectangle.
 
 use hearth_kinematics::to_pose;
 use hearth_planning::Obstacles;
@@ -101,6 +102,77 @@ impl PlaceTarget {
             ],
             support: Some(model),
         })
+    }
+
+    /// Every free horizontal top face of `model`'s root collision parts of at least `min_area`
+    /// square metres, shrunk by 2 cm: tops of tables and worktops, shelves, the floor of a
+    /// sink's basin. A face with another part of the model right above most of it (within
+    /// 10 cm) is covered and left out.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a model without collision geometry or a bad area.
+    ///
+    /// ```no_run
+    /// # fn f(world: &hearth_sim::world::World, counter: hearth_sim::world::ModelHandle) {
+    /// let tops = hearth_skills::place::PlaceTarget::surfaces_of(world, counter, 0.02).unwrap();
+    /// assert!(tops.iter().all(|t| t.validate().is_ok()));
+    /// # }
+    /// ```
+    pub fn surfaces_of(world: &World, model: ModelHandle, min_area: f64) -> SkillResult<Vec<Self>> {
+        if !min_area.is_finite() || min_area <= 0.0 {
+            return Err(SkillError::BadInput(format!(
+                "minimum area {min_area} must be positive"
+            )));
+        }
+        let m = world.model(model)?;
+        let shape = m
+            .link_shape(m.root())
+            .ok_or_else(|| SkillError::BadInput(format!("`{}` has no collision shape", m.name())))?;
+        let pose = world.base_pose(model)? * shape.origin;
+        let parts: Vec<(Isometry3<f64>, hearth_kinematics::parry3d::shape::SharedShape)> =
+            match shape.shape.as_compound() {
+                Some(c) => c
+                    .shapes()
+                    .iter()
+                    .map(|(p, s)| (pose * hearth_kinematics::from_pose(p), s.clone()))
+                    .collect(),
+                None => vec![(pose, shape.shape.clone())],
+            };
+        let boxes: Vec<_> = parts.iter().map(|(p, s)| s.compute_aabb(&to_pose(p))).collect();
+        let mut out = Vec::new();
+        for (i, (p, s)) in parts.iter().enumerate() {
+            // Boxes standing upright (their z axis vertical) have a horizontal top face.
+            if s.as_cuboid().is_none() || (p.rotation * Vector3::z()).z.abs() < 0.999 {
+                continue;
+            }
+            let b = &boxes[i];
+            let (x0, y0, x1, y1) = (b.mins.x as f64, b.mins.y as f64, b.maxs.x as f64, b.maxs.y as f64);
+            let z = b.maxs.z as f64;
+            let area = (x1 - x0) * (y1 - y0);
+            if area < min_area {
+                continue;
+            }
+            let covered: f64 = boxes
+                .iter()
+                .enumerate()
+                .filter(|&(k, o)| k != i && (o.mins.z as f64) > z + 0.002 && (o.mins.z as f64) < z + 0.10)
+                .map(|(_, o)| {
+                    let w = (x1.min(o.maxs.x as f64) - x0.max(o.mins.x as f64)).max(0.0);
+                    let h = (y1.min(o.maxs.y as f64) - y0.max(o.mins.y as f64)).max(0.0);
+                    w * h
+                })
+                .sum();
+            if covered > 0.5 * area || x1 - x0 < 0.05 || y1 - y0 < 0.05 {
+                continue;
+            }
+            out.push(Self {
+                z,
+                min: [x0 + 0.02, y0 + 0.02],
+                max: [x1 - 0.02, y1 - 0.02],
+                support: Some(model),
+            });
+        }
+        Ok(out)
     }
 
     /// Checks that the rectangle is finite and not empty.

@@ -182,3 +182,36 @@ fn asset_surfaces_become_world_regions() {
         assert!(t.min[0] >= 2.0 - 0.8 && t.max[0] <= 2.0 + 0.8, "{t:?}");
     }
 }
+
+#[test]
+fn surfaces_of_a_counter_include_its_worktop_and_the_sink_basin() {
+    let mut scene = SceneFile::empty("counter");
+    let mut counter = SceneObject::new("counter", "counter", 0, [2.0, 0.0, 0.0]);
+    counter.fixed = true;
+    scene.objects.push(counter);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let counter = loaded.object("counter").unwrap();
+    let tops = PlaceTarget::surfaces_of(&world, counter, 0.02).unwrap();
+    let worktop = tops.iter().filter(|t| (t.z - 0.85).abs() < 0.01).count();
+    assert!(worktop >= 2, "worktop pieces around the sink: {tops:?}");
+    // The basin floor: below the worktop, under the hole in the middle (centre sink).
+    let basin = tops
+        .iter()
+        .find(|t| t.z < 0.7 && t.z > 0.6 && t.min[1] < 0.0 && t.max[1] > 0.0)
+        .unwrap_or_else(|| panic!("no basin among {tops:?}"));
+    assert!(basin.max[1] - basin.min[1] > 0.3, "{basin:?}");
+    // A table's legs are covered by its top: one surface only.
+    let mut scene = SceneFile::empty("table");
+    scene
+        .objects
+        .push(SceneObject::new("table", "table", 0, [0.0, 0.0, 0.0]));
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let tops = PlaceTarget::surfaces_of(&world, loaded.object("table").unwrap(), 0.02).unwrap();
+    assert_eq!(tops.len(), 1, "{tops:?}");
+    assert!(matches!(
+        PlaceTarget::surfaces_of(&world, loaded.object("table").unwrap(), -1.0),
+        Err(SkillError::BadInput(_))
+    ));
+}
