@@ -80,7 +80,7 @@ impl ArmSettings {
             chain: "arm_with_torso".into(),
             tip: "gripper_link".into(),
             support_links: vec!["base_link".into(), "l_wheel_link".into(), "r_wheel_link".into()],
-            margin: 0.01,
+            margin: 0.02,
             resolution: 0.02,
             plan_iterations: 20_000,
             plan_time: 5.0,
@@ -697,7 +697,8 @@ impl Arm {
     }
 
     /// Plans a motion to `target` without executing it (a dry run): IK goals, BiRRT, parabolic
-    /// shortcutting, jerk-limited timing. `ignore` lists bodies the motion may touch.
+    /// shortcutting, jerk-limited timing. `ignore` lists bodies the motion may touch. Motions
+    /// keep `margin` from obstacles, unless the arm starts closer than that (then none).
     ///
     /// # Errors
     /// [`SkillError::IkFailed`], [`SkillError::PlanningFailed`] (e.g. the start in collision,
@@ -722,6 +723,11 @@ impl Arm {
         let t0 = Instant::now();
         let mut validity = self.validity(world, ignore, self.settings.margin)?;
         let (_, start) = self.configuration(world)?;
+        if !validity.is_valid(&start) {
+            // Closer than the margin to something (after a contact-rich move): plan without
+            // the margin rather than not at all; a start that touches is still refused.
+            validity = self.validity(world, ignore, 0.0)?;
+        }
         let goals = self.goal_configurations(world, target, &mut validity, rng)?;
         let mut motion = MotionValidator::new(self.space.clone(), self.settings.resolution);
         let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals));

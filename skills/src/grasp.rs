@@ -69,6 +69,8 @@ pub struct GraspSettings {
     pub palm_half_height: f64,
     /// Length of the finger pads ahead of the tip origin, metres.
     pub finger_reach: f64,
+    /// Half the finger pads' height across the approach and the finger axis, metres.
+    pub pad_half_height: f64,
     /// Straight final approach, metres.
     pub approach: f64,
     /// Lift after closing, metres.
@@ -93,6 +95,7 @@ impl Default for GraspSettings {
             palm_offset: 0.027,
             palm_half_height: 0.045,
             finger_reach: 0.036,
+            pad_half_height: 0.018,
             approach: 0.10,
             lift: 0.10,
             speed: 0.08,
@@ -199,9 +202,12 @@ pub fn grasp_candidates(
             // grasps high enough for the palm to clear the support.
             let x = (a.x + settings.palm_offset + 0.005).min((a.x + b.x) / 2.0);
             let mut at = frame * Point3::new(x, (a.y + b.y) / 2.0, (a.z + b.z) / 2.0);
-            if pitch == 0.0 {
-                at.z = at.z.max(lo.z + settings.palm_half_height + 0.005);
-            }
+            // Lowest point of the gripper below the tip origin: the pads' front lower edge or
+            // the palm's lower edge, whichever is lower for this pitch; 1 cm above the support.
+            let (sp, cp) = pitch.sin_cos();
+            let pads = settings.finger_reach * sp + settings.pad_half_height * cp;
+            let palm = settings.palm_half_height * cp - settings.palm_offset * sp;
+            at.z = at.z.max(lo.z + pads.max(palm) + 0.01);
             out.push(GraspCandidate {
                 kind: GraspKind::Side,
                 pose: Isometry3::from_parts(Translation3::from(at.coords), rotation),
@@ -226,10 +232,10 @@ pub fn grasp_candidates(
             if width > settings.max_width {
                 continue;
             }
-            // Palm 5 mm above the top, fingertips 5 mm above the support at the lowest.
+            // Palm 5 mm above the top, fingertips 1 cm above the support at the lowest.
             let top = hi.z;
             let z = (top - settings.palm_offset - 0.005)
-                .max(lo.z + settings.finger_reach + 0.005)
+                .max(lo.z + settings.finger_reach + 0.01)
                 .min(top);
             let mid = frame * Point3::new(0.0, (a.y + b.y) / 2.0, (a.z + b.z) / 2.0);
             tops.push(GraspCandidate {
@@ -323,8 +329,15 @@ pub fn grasp<R: Rng + ?Sized>(
         world.gripper_open(arm.robot())?;
         r.approach = arm.execute(world, &plan, execution)?;
         let moved = (world.base_pose(object)?.translation.vector - planned_at).norm();
-        if moved > 0.01 {
+        if moved > 0.02 {
             disturbed = format!("`{name}` moved {moved:.3} m during the approach");
+            // Clear of it again before planning anew.
+            let back = LinearMove {
+                speed: settings.speed,
+                check_world: false,
+                ..LinearMove::new(-candidate.approach, 0.05)
+            };
+            arm.move_linear(world, &back, execution)?;
             continue;
         }
         let approach = LinearMove {
@@ -335,7 +348,9 @@ pub fn grasp<R: Rng + ?Sized>(
         };
         let down = arm.move_linear(world, &approach, execution)?;
         let moved = (world.base_pose(object)?.translation.vector - planned_at).norm();
-        if down.stopped_by_force || moved > 0.01 {
+        // Stopped short by a contact (fingertips on the support in the last millimetres are
+        // no reason to give up), or the object was pushed.
+        if (down.stopped_by_force && down.travelled < settings.approach - 0.01) || moved > 0.02 {
             disturbed = format!(
                 "the final approach to `{name}` was blocked ({:.3} m of {:.3} m, object moved {moved:.3} m)",
                 down.travelled, settings.approach
@@ -343,7 +358,7 @@ pub fn grasp<R: Rng + ?Sized>(
             let back = LinearMove {
                 speed: settings.speed,
                 check_world: false,
-                ..LinearMove::new(-candidate.approach, down.travelled.max(0.02))
+                ..LinearMove::new(-candidate.approach, down.travelled + 0.05)
             };
             arm.move_linear(world, &back, execution)?;
             continue;
@@ -414,6 +429,17 @@ pub fn grasp<R: Rng + ?Sized>(
             report.lifted, settings.lift
         )));
     }
+    // The object may have turned a little in the fingers while lifted: hold it as it hangs.
+    let tip = arm.tip_pose(world)?;
+    let (shape, shape_pose) = object_shape(world, object)?;
+    arm.set_held(Some(Held {
+        object,
+        name,
+        bodies,
+        offset: tip.inverse() * world.base_pose(object)?,
+        shape,
+        shape_offset: tip.inverse() * shape_pose,
+    }));
     Ok(report)
 }
 
@@ -503,6 +529,7 @@ fn check_settings(s: &GraspSettings) -> SkillResult<()> {
         ("palm offset", s.palm_offset),
         ("palm half height", s.palm_half_height),
         ("finger reach", s.finger_reach),
+        ("pad half height", s.pad_half_height),
     ] {
         if !x.is_finite() || x < 0.0 {
             return Err(SkillError::BadInput(format!("grasp {what} {x} must be non-negative")));

@@ -106,8 +106,8 @@ impl PlaceTarget {
 
     /// Every free horizontal top face of `model`'s root collision parts of at least `min_area`
     /// square metres, shrunk by 2 cm: tops of tables and worktops, shelves, the floor of a
-    /// sink's basin. A face with another part of the model right above most of it (within
-    /// 10 cm) is covered and left out.
+    /// sink's basin. A face with other parts of the model over most of it within 20 cm (a
+    /// panel under a worktop, a shelf board under the next) is covered and left out.
     ///
     /// # Errors
     /// [`SkillError::BadInput`] for a model without collision geometry or a bad area.
@@ -155,7 +155,7 @@ impl PlaceTarget {
             let covered: f64 = boxes
                 .iter()
                 .enumerate()
-                .filter(|&(k, o)| k != i && (o.mins.z as f64) > z + 0.002 && (o.mins.z as f64) < z + 0.10)
+                .filter(|&(k, o)| k != i && (o.mins.z as f64) > z + 0.002 && (o.mins.z as f64) < z + 0.20)
                 .map(|(_, o)| {
                     let w = (x1.min(o.maxs.x as f64) - x0.max(o.mins.x as f64)).max(0.0);
                     let h = (y1.min(o.maxs.y as f64) - y0.max(o.mins.y as f64)).max(0.0);
@@ -210,7 +210,8 @@ pub struct PlaceSettings {
     pub spacing: f32,
     /// Speed of the straight moves, m/s.
     pub speed: f64,
-    /// Largest distance between the planned and the final position of the object, metres.
+    /// How far (metres) the object may rest outside the region or off the surface height and
+    /// still count as placed.
     pub tolerance: f64,
     /// Plan only, execute nothing.
     pub dry_run: bool,
@@ -225,7 +226,7 @@ impl Default for PlaceSettings {
             samples: 40,
             spacing: 0.01,
             speed: 0.08,
-            tolerance: 0.04,
+            tolerance: 0.02,
             dry_run: false,
         }
     }
@@ -256,7 +257,7 @@ pub struct PlaceReport {
 /// # Errors
 /// [`SkillError::NotHeld`] without a held object; [`SkillError::BadInput`] for a bad target or
 /// settings; [`SkillError::Unreachable`] when no sampled placement is free and reachable;
-/// [`SkillError::NotFinished`] when the object did not come to rest where planned; planning and
+/// [`SkillError::NotFinished`] when the object did not come to rest upright on the region; planning and
 /// execution errors of [`Arm`].
 ///
 /// ```no_run
@@ -375,14 +376,24 @@ pub fn place<R: Rng + ?Sized>(
         world.step();
     }
     report.rest = world.base_pose(held.object)?;
-    let off = (report.rest.translation.vector - planned.translation.vector)
-        .xy()
-        .norm();
+    // Placed: upright, on the surface, inside the region (the object may have swung in the
+    // fingers on the way, so it need not be on the sampled spot).
+    let rest = report.rest.translation.vector;
     let tilt = (report.rest.rotation * Vector3::z()).dot(&(planned.rotation * Vector3::z()));
-    if off > settings.tolerance || tilt < 0.9 {
+    let bottom = held
+        .shape
+        .compute_aabb(&to_pose(&(report.rest * shape_in_object)))
+        .mins
+        .z as f64;
+    let t = settings.tolerance;
+    let inside = rest.x > target.min[0] - t
+        && rest.x < target.max[0] + t
+        && rest.y > target.min[1] - t
+        && rest.y < target.max[1] + t;
+    if tilt < 0.9 || (bottom - target.z).abs() > t || !inside {
         return Err(SkillError::NotFinished(format!(
-            "`{}` came to rest {off:.3} m from its placement (tilt cos {tilt:.2})",
-            held.name
+            "`{}` came to rest at ({:.2}, {:.2}, {:.2}), bottom {bottom:.3} m (surface {:.3} m), tilt cos {tilt:.2}: not on the region",
+            held.name, rest.x, rest.y, rest.z, target.z
         )));
     }
     Ok(report)

@@ -196,11 +196,17 @@ fn surfaces_of_a_counter_include_its_worktop_and_the_sink_basin() {
     let worktop = tops.iter().filter(|t| (t.z - 0.85).abs() < 0.01).count();
     assert!(worktop >= 2, "worktop pieces around the sink: {tops:?}");
     // The basin floor: below the worktop, under the hole in the middle (centre sink).
-    let basin = tops
-        .iter()
-        .find(|t| t.z < 0.7 && t.z > 0.6 && t.min[1] < 0.0 && t.max[1] > 0.0)
-        .unwrap_or_else(|| panic!("no basin among {tops:?}"));
-    assert!(basin.max[1] - basin.min[1] > 0.3, "{basin:?}");
+    let low: Vec<_> = tops.iter().filter(|t| t.z > 0.3 && t.z < 0.8).collect();
+    assert_eq!(
+        low.len(),
+        1,
+        "one surface between the cabinet and the worktop: {tops:?}"
+    );
+    let basin = low[0];
+    assert!((basin.z - 0.644).abs() < 0.005, "{basin:?}");
+    // 0.4 × 0.5 m, less 2 cm at each edge.
+    assert!((basin.max[0] - basin.min[0] - 0.36).abs() < 0.01, "{basin:?}");
+    assert!((basin.max[1] - basin.min[1] - 0.46).abs() < 0.01, "{basin:?}");
     // A table's legs are covered by its top: one surface only.
     let mut scene = SceneFile::empty("table");
     scene
@@ -214,4 +220,67 @@ fn surfaces_of_a_counter_include_its_worktop_and_the_sink_basin() {
         PlaceTarget::surfaces_of(&world, loaded.object("table").unwrap(), -1.0),
         Err(SkillError::BadInput(_))
     ));
+}
+
+#[test]
+fn kinematic_placement_puts_the_mug_into_a_sink_basin() {
+    // A counter with a centre sink to the robot's left, the mug on a table to its right.
+    let top = Asset::build(Category::Table, 0, 1.0).unwrap().aabb_max[2];
+    let mut scene = SceneFile::empty("sink");
+    let mut table = SceneObject::new("table", "table", 0, [0.85, -0.95, 0.0]);
+    table.fixed = true;
+    scene.objects.push(table);
+    let mut mug = SceneObject::new("mug", "mug", 0, [0.7, -0.45, top]);
+    mug.on = Some("table".into());
+    scene.objects.push(mug);
+    let mut counter = SceneObject::new("counter", "counter", 0, [0.85, 0.5, 0.0]);
+    counter.orientation = hearth_sim::scene::Orientation::Yaw(std::f64::consts::PI);
+    counter.fixed = true;
+    scene.objects.push(counter);
+    let mut world = World::new(WorldConfig::default()).unwrap();
+    let loaded = world.load_scene(&scene).unwrap();
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())
+        .unwrap();
+    world.tuck(robot).unwrap();
+    world.settle(120);
+    let (mug, counter) = (loaded.object("mug").unwrap(), loaded.object("counter").unwrap());
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap();
+    let basin = PlaceTarget::surfaces_of(&world, counter, 0.02)
+        .unwrap()
+        .into_iter()
+        .find(|t| t.z > 0.6 && t.z < 0.7)
+        .unwrap();
+    place(
+        &mut world,
+        &mut arm,
+        &basin,
+        &PlaceSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    let rest = world.base_pose(mug).unwrap().translation;
+    assert!(
+        (rest.z - basin.z).abs() < 0.02,
+        "the mug rests at {rest:?}, the basin floor is at {:.3}",
+        basin.z
+    );
+    assert!(
+        rest.x > basin.min[0] - 0.02
+            && rest.x < basin.max[0] + 0.02
+            && rest.y > basin.min[1] - 0.02
+            && rest.y < basin.max[1] + 0.02
+    );
 }
