@@ -962,15 +962,29 @@ impl Arm {
         Ok(())
     }
 
-    /// Fails with `Slipped` when the held object is more than 3 cm from where the grasp put it.
+    /// Fails with `Slipped` when the held object has left the fingers: more than 3 cm from
+    /// where the grasp put it with fewer than two finger links touching it, or more than 8 cm
+    /// away at all (a pinched object may swing about the finger axis and stay held).
     fn check_held(&self, world: &World) -> SkillResult<()> {
         if let Some(h) = &self.held {
             let expected = self.tip_pose(world)? * h.offset;
             let actual = world.base_pose(h.object)?;
             let off = (expected.translation.vector - actual.translation.vector).norm();
-            if off > 0.03 {
+            if off <= 0.03 {
+                return Ok(());
+            }
+            let mut links: Vec<String> = world
+                .contacts(self.robot)?
+                .into_iter()
+                .filter(|c| h.bodies.contains(&c.other) && c.link.contains("finger"))
+                .map(|c| c.link)
+                .collect();
+            links.sort_unstable();
+            links.dedup();
+            let fingers = links.len();
+            if fingers < 2 || off > 0.08 {
                 return Err(SkillError::Slipped(format!(
-                    "`{}` is {off:.3} m from where the gripper holds it",
+                    "`{}` is {off:.3} m from where the gripper holds it, {fingers} finger(s) on it",
                     h.name
                 )));
             }
