@@ -1,0 +1,1339 @@
+//! [`Arm`]: planning and executing arm motions of a robot in the live world.
+//!
+//! A planned motion goes: collision-aware IK for the goal (several distinct solutions) →
+//! BiRRT in the joint space of the arm chain, checked against the live world (what the base
+//! stands on ignored, a held object attached) → random, then acceleration-bounded (parabolic)
+//! shortcutting → a jerk-limited (Ruckig) trajectory through the smoothed path, kept only if it
+//! is collision-free at a fine resolution → execution as position targets per control step
+//! ([`Execution::Physics`], with unexpected contacts reported as [`SkillError::Collision`]) or
+//! by setting the joints along it ([`Execution::Kinematic`]).
+//!
+//! Straight-line moves of the end effector ([`Arm::move_linear`]) are solved as small IK steps
+//! from the current configuration and executed at a fixed Cartesian speed until the distance is
+//! covered or the contact force on the arm passes a limit.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use hearth_kinematics::parry3d::shape::SharedShape;
+use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::goal::PoseGoal;
+use hearth_planning::obstacles::ParryScene;
+use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
+use hearth_planning::space::JointSpace;
+use hearth_planning::trajectory::{Limits, Trajectory};
+use hearth_planning::validity::Attached;
+use hearth_planning::{
+    BiRrt, Budget, Goal, MotionValidator, Path, PlanError, PlanRequest, Planner, RobotValidity, StateValidator,
+};
+use hearth_sim::world::{BodyId, JointCommand, ModelHandle, World};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::Rng;
+
+use crate::error::{SkillError, SkillResult};
+use crate::execution::Execution;
+
+/// Settings of an [`Arm`].
+///
+/// ```
+/// let s = hearth_skills::arm::ArmSettings::fetch();
+/// assert_eq!(s.chain, "arm_with_torso");
+/// assert_eq!(s.tip, "gripper_link");
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmSettings {
+    /// Name of the planned chain of the robot model.
+    pub chain: String,
+    /// The end-effector link (IK tip; what grasps and pushes).
+    pub tip: String,
+    /// Links whose contacts with what the robot stands on are expected (base, wheels).
+    pub support_links: Vec<String>,
+    /// Clearance kept from obstacles by planned motions, metres.
+    pub margin: f32,
+    /// Resolution of edge checks, radians (joint-space distance).
+    pub resolution: f64,
+    /// BiRRT iterations at most (the budget that keeps a seed's result reproducible).
+    pub plan_iterations: u64,
+    /// Wall-clock safety limit of one BiRRT run, seconds.
+    pub plan_time: f64,
+    /// Random shortcut attempts after planning.
+    pub shortcut_attempts: usize,
+    /// Fraction of the joint velocity and acceleration limits used by planned motions.
+    pub velocity_scale: f64,
+    /// Contact force (N) on a link that counts as a collision during a planned motion.
+    pub contact_force: f64,
+    /// Control steps to hold the goal after a motion.
+    pub settle_steps: usize,
+    /// IK restarts per call when sampling goal configurations.
+    pub ik_attempts: usize,
+    /// Largest final joint error (rad or m) accepted after a physics execution.
+    pub tolerance: f64,
+    /// Distance from the tip link's origin to the fingertips along its approach axis (+x),
+    /// metres: where pushes touch.
+    pub tool_reach: f64,
+}
+
+impl ArmSettings {
+    /// Settings for the Fetch: `arm_with_torso` to `gripper_link`, base and wheels as support.
+    pub fn fetch() -> Self {
+        Self {
+            chain: "arm_with_torso".into(),
+            tip: "gripper_link".into(),
+            support_links: vec!["base_link".into(), "l_wheel_link".into(), "r_wheel_link".into()],
+            margin: 0.02,
+            resolution: 0.02,
+            plan_iterations: 20_000,
+            plan_time: 5.0,
+            shortcut_attempts: 100,
+            velocity_scale: 0.6,
+            contact_force: 5.0,
+            settle_steps: 20,
+            ik_attempts: 40,
+            tolerance: 0.05,
+            tool_reach: 0.036,
+        }
+    }
+}
+
+/// Where a planned motion should take the end effector, in the world frame.
+///
+/// ```
+/// use hearth_skills::arm::ArmTarget;
+/// let t = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+/// assert!(matches!(t, ArmTarget::Position(_)));
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub enum ArmTarget {
+    /// A full pose of the tip link.
+    Pose(Isometry3<f64>),
+    /// A position of the tip link's origin, any orientation.
+    Position(Point3<f64>),
+    /// A configuration of the chain.
+    Joints(Vec<f64>),
+}
+
+/// An object held in the gripper: it moves with the tip and is checked like a link.
+///
+/// ```no_run
+/// # fn f(arm: &hearth_skills::Arm) {
+/// if let Some(held) = arm.held() {
+///     println!("holding {} at {:?} in the gripper frame", held.name, held.offset);
+/// }
+/// # }
+/// ```
+#[derive(Clone)]
+pub struct Held {
+    /// The object's model.
+    pub object: ModelHandle,
+    /// Its name (for messages).
+    pub name: String,
+    /// Its bodies (ignored as obstacles while held).
+    pub bodies: Vec<BodyId>,
+    /// The object's root pose in the tip frame at the grasp.
+    pub offset: Isometry3<f64>,
+    /// Its collision shape.
+    pub shape: SharedShape,
+    /// The shape's pose in the tip frame.
+    pub shape_offset: Isometry3<f64>,
+}
+
+impl std::fmt::Debug for Held {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Held")
+            .field("name", &self.name)
+            .field("offset", &self.offset)
+            .finish()
+    }
+}
+
+/// What a planned motion took and gave.
+///
+/// ```
+/// let r = hearth_skills::arm::MotionReport::default();
+/// assert!(!r.executed);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MotionReport {
+    /// IK, planning and smoothing time.
+    pub planning_time: Duration,
+    /// Joint-space length of the executed path (rad, metres for the torso).
+    pub path_length: f64,
+    /// Duration of the trajectory, seconds.
+    pub duration: f64,
+    /// Waypoints of the planner's path.
+    pub waypoints: usize,
+    /// Whether the jerk-limited (Ruckig) trajectory was used (else the acceleration-bounded
+    /// one, when the jerk-limited one cut a corner into an obstacle).
+    pub jerk_limited: bool,
+    /// Whether the motion was executed (false for a dry run).
+    pub executed: bool,
+    /// Largest joint error at the end of execution (0 for kinematic execution).
+    pub tracking_error: f64,
+}
+
+/// A planned motion, ready to execute.
+///
+/// ```no_run
+/// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+/// use hearth_skills::arm::ArmTarget;
+/// use rand::SeedableRng;
+/// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+/// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+/// assert!(plan.trajectory.duration() > 0.0 && !plan.report.executed);
+/// arm.execute(world, &plan, hearth_skills::Execution::Physics).unwrap();
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct ArmPlan {
+    /// The trajectory of the chain.
+    pub trajectory: Trajectory,
+    /// Its final configuration.
+    pub goal: Vec<f64>,
+    /// Timing and size.
+    pub report: MotionReport,
+}
+
+/// A straight-line move of the end effector.
+///
+/// ```
+/// use hearth_skills::arm::LinearMove;
+/// let m = LinearMove::new(nalgebra::Vector3::new(0.0, 0.0, 1.0), 0.1);
+/// assert_eq!(m.force_limit, 60.0);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearMove {
+    /// Direction in the world frame (normalised on use).
+    pub direction: Vector3<f64>,
+    /// Distance, metres.
+    pub distance: f64,
+    /// Cartesian speed, m/s.
+    pub speed: f64,
+    /// The move stops when the contact force on the arm (sum over its links, N) stays above
+    /// this for two control steps.
+    pub force_limit: f64,
+    /// Length of one IK step, metres.
+    pub step: f64,
+    /// Bodies the move may go into (the pushed or grasped object); everything else is an
+    /// obstacle for the straight-line path, which is cut short before the first collision.
+    pub ignore: Vec<BodyId>,
+    /// Whether the obstacles of the world are checked at all (else only self-collision).
+    pub check_world: bool,
+}
+
+impl LinearMove {
+    /// A move at 0.1 m/s with a 60 N force limit, 1 cm IK steps, checked against the world.
+    pub fn new(direction: Vector3<f64>, distance: f64) -> Self {
+        Self {
+            direction,
+            distance,
+            speed: 0.1,
+            force_limit: 60.0,
+            step: 0.01,
+            ignore: Vec::new(),
+            check_world: true,
+        }
+    }
+}
+
+/// A move of the tip through world poses (e.g. along a door handle's arc).
+///
+/// ```
+/// use hearth_skills::arm::PoseMove;
+/// let m = PoseMove::new(vec![nalgebra::Isometry3::translation(0.6, 0.0, 0.9)]);
+/// assert_eq!(m.force_limit, 60.0);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseMove {
+    /// The tip poses, world frame, each a small step from the one before (the first a small
+    /// step from where the tip is).
+    pub poses: Vec<Isometry3<f64>>,
+    /// Time spent on each step, seconds.
+    pub step_time: f64,
+    /// Force limit on the arm, N (as for [`LinearMove`]).
+    pub force_limit: f64,
+    /// Bodies the move may touch.
+    pub ignore: Vec<BodyId>,
+    /// Whether the world's obstacles are checked (else only self-collision).
+    pub check_world: bool,
+    /// A line in the tip frame (point, direction) the tip may turn about to stay reachable:
+    /// the long axis of a pinched handle bar.
+    pub free_axis: Option<(Point3<f64>, Vector3<f64>)>,
+}
+
+impl PoseMove {
+    /// 0.1 s per step, 60 N, checked against the world.
+    pub fn new(poses: Vec<Isometry3<f64>>) -> Self {
+        Self {
+            poses,
+            step_time: 0.1,
+            force_limit: 60.0,
+            ignore: Vec::new(),
+            check_world: true,
+            free_axis: None,
+        }
+    }
+}
+
+/// How a [`PoseMove`] ended.
+///
+/// ```
+/// assert_eq!(hearth_skills::arm::PoseReport::default().planned, 0);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PoseReport {
+    /// Poses the IK path reaches (a prefix of the requested ones).
+    pub planned: usize,
+    /// Poses requested.
+    pub requested: usize,
+    /// Largest contact force on the arm seen (N).
+    pub peak_force: f64,
+    /// Whether the force limit stopped the move.
+    pub stopped_by_force: bool,
+    /// Simulated time taken, seconds.
+    pub duration: f64,
+}
+
+/// How a straight-line move ended.
+///
+/// ```
+/// let r = hearth_skills::arm::LinearReport::default();
+/// assert_eq!(r.travelled, 0.0);
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LinearReport {
+    /// Distance the IK path covers (less than asked where it was cut short), metres.
+    pub planned: f64,
+    /// Distance the tip travelled along the direction, metres.
+    pub travelled: f64,
+    /// Largest contact force on the arm seen (N).
+    pub peak_force: f64,
+    /// Whether the force limit stopped the move.
+    pub stopped_by_force: bool,
+    /// Simulated time taken, seconds.
+    pub duration: f64,
+}
+
+/// Plans and executes motions of one robot's arm in a [`World`].
+///
+/// ```no_run
+/// use hearth_skills::arm::{Arm, ArmSettings, ArmTarget};
+/// use hearth_skills::Execution;
+/// use hearth_sim::kinematics::RobotModel;
+/// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+/// use rand::SeedableRng;
+///
+/// let mut world = World::new(WorldConfig::default())?;
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::translation(0.0, 0.0, 0.02), SpawnOptions::fixed())?;
+/// world.tuck(robot)?;
+/// let mut arm = Arm::new(&world, robot, ArmSettings::fetch())?;
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+/// let report = arm.move_to(&mut world, &ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0)), Execution::Physics, &mut rng)?;
+/// assert!(report.executed && report.duration > 0.0);
+/// # Ok::<(), hearth_skills::SkillError>(())
+/// ```
+pub struct Arm {
+    robot: ModelHandle,
+    chain: Chain,
+    tip: usize,
+    matrix: SelfCollisionMatrix,
+    space: JointSpace,
+    limits: Limits,
+    settings: ArmSettings,
+    held: Option<Held>,
+    /// Joint values (model variable, value) planning assumes instead of the measured ones.
+    assume: Vec<(usize, f64)>,
+}
+
+impl std::fmt::Debug for Arm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Arm")
+            .field("chain", &self.chain.joint_names())
+            .field("settings", &self.settings)
+            .field("held", &self.held)
+            .finish()
+    }
+}
+
+impl Arm {
+    /// An arm helper for `robot`: resolves the chain and tip, computes the self-collision
+    /// matrix (once; a few hundred milliseconds for the Fetch).
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for an unknown chain or tip or unusable settings;
+    /// [`SkillError::World`] for an unknown robot.
+    pub fn new(world: &World, robot: ModelHandle, settings: ArmSettings) -> SkillResult<Self> {
+        let model = world.model(robot)?.clone();
+        let chain = Chain::named(&model, &settings.chain)
+            .map_err(|e| SkillError::BadInput(format!("chain `{}`: {e}", settings.chain)))?;
+        let tip = model
+            .link_index(&settings.tip)
+            .map_err(|e| SkillError::BadInput(format!("tip `{}`: {e}", settings.tip)))?;
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(settings.resolution)
+            || !positive(settings.plan_time)
+            || !positive(settings.contact_force)
+            || !positive(settings.tolerance)
+            || !(0.0..=1.0).contains(&settings.velocity_scale)
+            || settings.velocity_scale == 0.0
+            || !(settings.margin.is_finite() && settings.margin >= 0.0)
+            || settings.plan_iterations == 0
+            || settings.ik_attempts == 0
+        {
+            return Err(SkillError::BadInput(format!("arm settings out of range: {settings:?}")));
+        }
+        let matrix = SelfCollisionMatrix::compute(
+            &model,
+            &SelfCollisionSettings {
+                samples: 500,
+                ..Default::default()
+            },
+        );
+        let space = JointSpace::from_chain(&chain).map_err(|e| SkillError::BadInput(e.to_string()))?;
+        let limits = Limits::for_chain(&chain).scaled(settings.velocity_scale, settings.velocity_scale);
+        Ok(Self {
+            robot,
+            chain,
+            tip,
+            matrix,
+            space,
+            limits,
+            settings,
+            held: None,
+            assume: Vec::new(),
+        })
+    }
+
+    /// The robot.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let robot = arm.robot();
+    /// assert!(world.model(robot).is_ok());
+    /// # }
+    /// ```
+    pub fn robot(&self) -> ModelHandle {
+        self.robot
+    }
+
+    /// The planned chain.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert_eq!(arm.chain().dof(), 8); // torso + 7 arm joints on the Fetch
+    /// # }
+    /// ```
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// The settings.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert_eq!(arm.settings().tip, "gripper_link");
+    /// # }
+    /// ```
+    pub fn settings(&self) -> &ArmSettings {
+        &self.settings
+    }
+
+    /// The held object, if any.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// assert!(arm.held().is_none());
+    /// # }
+    /// ```
+    pub fn held(&self) -> Option<&Held> {
+        self.held.as_ref()
+    }
+
+    /// Sets (or clears) the held object; it is attached to the tip for planning.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// arm.set_held(None);
+    /// assert!(arm.held().is_none());
+    /// # }
+    /// ```
+    pub fn set_held(&mut self, held: Option<Held>) {
+        self.held = held;
+    }
+
+    /// Joints outside the chain (e.g. fingers about to open) that planning should assume at
+    /// the given values instead of where they are now; an empty list measures them all.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for an unknown joint or a value outside its limits.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// arm.assume_joints(&[("r_gripper_finger_joint", 0.05)]).unwrap();
+    /// arm.assume_joints(&[]).unwrap();
+    /// # }
+    /// ```
+    pub fn assume_joints(&mut self, joints: &[(&str, f64)]) -> SkillResult<()> {
+        let model = self.chain.model();
+        let mut assume = Vec::with_capacity(joints.len());
+        for &(name, x) in joints {
+            let v = model
+                .variable_names()
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| SkillError::BadInput(format!("unknown joint `{name}`")))?;
+            if !(model.lower()[v]..=model.upper()[v]).contains(&x) || self.chain.variables().contains(&v) {
+                return Err(SkillError::BadInput(format!(
+                    "cannot assume `{name}` at {x}: outside its limits or part of the chain"
+                )));
+            }
+            assume.push((v, x));
+        }
+        self.assume = assume;
+        Ok(())
+    }
+
+    /// The reference configuration planning uses: measured, with assumed joints replaced.
+    fn reference(&self, world: &World) -> SkillResult<Vec<f64>> {
+        let (mut q, _) = self.configuration(world)?;
+        for &(v, x) in &self.assume {
+            q[v] = x;
+        }
+        Ok(q)
+    }
+
+    /// The tip link's world pose now.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let tip = arm.tip_pose(world).unwrap();
+    /// assert!(tip.translation.z > 0.0);
+    /// # }
+    /// ```
+    pub fn tip_pose(&self, world: &World) -> SkillResult<Isometry3<f64>> {
+        Ok(world.link_pose(self.robot, &self.settings.tip)?)
+    }
+
+    /// The full configuration now, clamped to the limits (gravity can press a joint a hair
+    /// beyond its limit), and the chain's part of it with continuous joints wrapped into
+    /// `(-π, π]`.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let (full, chain) = arm.configuration(world).unwrap();
+    /// assert_eq!(chain.len(), arm.chain().dof());
+    /// assert!(full.len() > chain.len());
+    /// # }
+    /// ```
+    pub fn configuration(&self, world: &World) -> SkillResult<(Vec<f64>, Vec<f64>)> {
+        let model = self.chain.model();
+        let mut q = world.joint_positions(self.robot)?;
+        for (v, x) in q.iter_mut().enumerate() {
+            *x = x.clamp(model.lower()[v], model.upper()[v]);
+        }
+        let mut c = vec![0.0; self.chain.dof()];
+        self.chain.gather(&q, &mut c);
+        for (x, &continuous) in c.iter_mut().zip(self.chain.continuous()) {
+            if continuous {
+                *x = hearth_kinematics::wrap_angle(*x);
+            }
+        }
+        Ok((q, c))
+    }
+
+    /// What the robot's support links stand on (and the ground): never obstacles.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// let under = arm.support_bodies(world).unwrap();
+    /// assert!(under.contains(&world.ground().unwrap()));
+    /// # }
+    /// ```
+    pub fn support_bodies(&self, world: &World) -> SkillResult<Vec<BodyId>> {
+        let mut under: Vec<BodyId> = world
+            .contacts(self.robot)?
+            .into_iter()
+            .filter(|c| self.settings.support_links.iter().any(|l| *l == c.link))
+            .map(|c| c.other)
+            .collect();
+        under.extend(world.ground());
+        under.sort_by_key(|b| b.handle().into_raw_parts());
+        under.dedup();
+        Ok(under)
+    }
+
+    /// A validity checker of the chain against the live world now: the robot's own bodies,
+    /// what it stands on, the held object and `ignore` excluded, `margin` of clearance, the
+    /// held object attached.
+    ///
+    /// # Errors
+    /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::planning::StateValidator;
+    /// let mut v = arm.validity(world, &[], 0.01).unwrap();
+    /// let (_, q) = arm.configuration(world).unwrap();
+    /// assert!(v.is_valid(&q));
+    /// # }
+    /// ```
+    pub fn validity(&self, world: &World, ignore: &[BodyId], margin: f32) -> SkillResult<RobotValidity> {
+        let mut skip = self.support_bodies(world)?;
+        skip.extend_from_slice(ignore);
+        if let Some(h) = &self.held {
+            skip.extend_from_slice(&h.bodies);
+        }
+        let view = world
+            .obstacles_view(&[self.robot])?
+            .excluding_bodies(&skip)
+            .with_margin(margin);
+        self.checker(world, Arc::new(view))
+    }
+
+    fn checker(
+        &self,
+        world: &World,
+        obstacles: Arc<dyn hearth_planning::obstacles::Obstacles>,
+    ) -> SkillResult<RobotValidity> {
+        let q = self.reference(world)?;
+        let mut v = RobotValidity::new(self.chain.clone(), self.matrix.clone(), obstacles);
+        v.set_reference(&q)?;
+        v.set_base(world.base_pose(self.robot)?);
+        if let Some(h) = &self.held {
+            v.attach(Attached {
+                name: h.name.clone(),
+                link: self.tip,
+                offset: h.shape_offset,
+                shape: h.shape.clone(),
+            });
+        }
+        Ok(v)
+    }
+
+    /// An IK solver for the tip with reproducible settings (no wall-clock limit).
+    fn ik(&self, world: &World, attempts: usize) -> SkillResult<IkSolver> {
+        let q = self.reference(world)?;
+        let settings = IkSettings {
+            time_limit: None,
+            max_attempts: attempts.max(1),
+            ..IkSettings::default()
+        };
+        let tip = &self.chain.model().links()[self.tip].name;
+        let mut ik = IkSolver::new(self.chain.clone(), tip, settings)?;
+        ik.set_reference(&q)?;
+        Ok(ik)
+    }
+
+    /// Goal configurations for `target`: distinct collision-free IK solutions (or the given
+    /// joints, checked).
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed target; [`SkillError::IkFailed`] when no
+    /// collision-free solution is found; [`SkillError::Unreachable`] for joints in collision.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let mut v = arm.validity(world, &[], 0.01).unwrap();
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let goals = arm.goal_configurations(world, &target, &mut v, &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(!goals.is_empty());
+    /// # }
+    /// ```
+    pub fn goal_configurations<R: Rng + ?Sized>(
+        &self,
+        world: &World,
+        target: &ArmTarget,
+        validity: &mut RobotValidity,
+        rng: &mut R,
+    ) -> SkillResult<Vec<Vec<f64>>> {
+        let (_, start) = self.configuration(world)?;
+        let base = world.base_pose(self.robot)?;
+        let ik_target = match target {
+            ArmTarget::Joints(q) => {
+                self.chain
+                    .check(q)
+                    .map_err(|e| SkillError::BadInput(format!("goal joints: {e}")))?;
+                if !validity.is_valid(q) {
+                    let why = validity.explain(q).map(|c| c.to_string()).unwrap_or_default();
+                    return Err(SkillError::Unreachable(format!("goal joints in collision: {why}")));
+                }
+                return Ok(vec![q.clone()]);
+            }
+            ArmTarget::Pose(p) => {
+                check_finite_pose(p)?;
+                IkTarget::Pose(base.inverse() * p)
+            }
+            ArmTarget::Position(p) => {
+                if !p.coords.iter().all(|x| x.is_finite()) {
+                    return Err(SkillError::BadInput(format!("goal position {p:?} is not finite")));
+                }
+                IkTarget::Position(base.inverse() * p)
+            }
+        };
+        let mut ik = self.ik(world, self.settings.ik_attempts)?;
+        let goal = PoseGoal {
+            target: ik_target,
+            solutions: 4,
+            max_calls: 8,
+            min_separation: 0.1,
+        };
+        match goal.sample(&mut ik, validity, &start, rng) {
+            Ok(g) => Ok(g.states().to_vec()),
+            Err(PlanError::BadInput(m)) => Err(SkillError::BadInput(m)),
+            Err(e @ PlanError::NoGoalConfiguration { .. }) => Err(SkillError::IkFailed(e.to_string())),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Plans a motion to `target` without executing it (a dry run): IK goals, BiRRT, parabolic
+    /// shortcutting, jerk-limited timing. `ignore` lists bodies the motion may touch. Motions
+    /// keep `margin` from obstacles, unless the arm starts closer than that (then none).
+    ///
+    /// # Errors
+    /// [`SkillError::IkFailed`], [`SkillError::PlanningFailed`] (e.g. the start in collision,
+    /// naming the contact), [`SkillError::PlanningTimeout`], [`SkillError::BadInput`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(plan.report.path_length > 0.0);
+    /// # }
+    /// ```
+    pub fn plan<R: Rng + ?Sized>(
+        &self,
+        world: &World,
+        target: &ArmTarget,
+        ignore: &[BodyId],
+        rng: &mut R,
+    ) -> SkillResult<ArmPlan> {
+        let t0 = Instant::now();
+        let mut validity = self.validity(world, ignore, self.settings.margin)?;
+        let (_, start) = self.configuration(world)?;
+        if !validity.is_valid(&start) {
+            // Closer than the margin to something (after a contact-rich move): plan without
+            // the margin rather than not at all; a start that touches is still refused.
+            validity = self.validity(world, ignore, 0.0)?;
+        }
+        let goals = self.goal_configurations(world, target, &mut validity, rng)?;
+        let mut motion = MotionValidator::new(self.space.clone(), self.settings.resolution);
+        let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals));
+        let budget = Budget::iterations(self.settings.plan_iterations).with_time(self.settings.plan_time);
+        let solution = BiRrt::default()
+            .plan(&mut motion, &mut validity, &request, &budget, rng)
+            .map_err(|e| SkillError::from(e.explain_with(&request, |q| validity.explain(q).map(|c| c.to_string()))))?;
+        let smoothed = smooth(
+            Smoothing::Parabolic,
+            &mut motion,
+            &mut validity,
+            &solution.path,
+            &self.limits,
+            &ShortcutSettings {
+                attempts: self.settings.shortcut_attempts,
+                time_limit: None,
+                fine_resolution: Some(self.settings.resolution / 10.0),
+            },
+            Duration::from_secs(1),
+            rng,
+        )?;
+        let goal = smoothed.path.states.last().cloned().unwrap_or(start);
+        // Jerk-limited execution through waypoints of the smoothed motion; it may cut corners,
+        // so it is kept only if it stays collision-free.
+        let waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+        let (trajectory, jerk_limited) = match Trajectory::jerk_limited(&self.space, &waypoints, &self.limits) {
+            Ok(j)
+                if j.check(&self.space, &mut validity, self.settings.resolution / 10.0)
+                    .is_ok() =>
+            {
+                (j, true)
+            }
+            _ => (smoothed.trajectory, false),
+        };
+        let path_length = trajectory.length(&self.space, self.settings.resolution);
+        Ok(ArmPlan {
+            report: MotionReport {
+                planning_time: t0.elapsed(),
+                path_length,
+                duration: trajectory.duration(),
+                waypoints: solution.path.states.len(),
+                jerk_limited,
+                executed: false,
+                tracking_error: 0.0,
+            },
+            trajectory,
+            goal,
+        })
+    }
+
+    /// Plans and executes a motion to `target`.
+    ///
+    /// # Errors
+    /// As [`Arm::plan`] and [`Arm::execute`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let r = arm.move_to(world, &target, hearth_skills::Execution::Kinematic, &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// assert!(r.executed);
+    /// # }
+    /// ```
+    pub fn move_to<R: Rng + ?Sized>(
+        &mut self,
+        world: &mut World,
+        target: &ArmTarget,
+        execution: Execution,
+        rng: &mut R,
+    ) -> SkillResult<MotionReport> {
+        let plan = self.plan(world, target, &[], rng)?;
+        self.execute(world, &plan, execution)
+    }
+
+    /// Executes a planned motion. In physics, the trajectory is sampled at the control rate as
+    /// position targets of the chain's joints (other joints keep their commands), then the goal
+    /// is held for `settle_steps`; kinematically, the joints are set along it.
+    ///
+    /// # Errors
+    /// [`SkillError::Collision`] naming the link and body when a contact pushes harder than
+    /// `contact_force` (the arm stops where it is); [`SkillError::Slipped`] when a held object
+    /// leaves the gripper; [`SkillError::NotFinished`] when the final joint error exceeds the
+    /// tolerance.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::ArmTarget;
+    /// use rand::SeedableRng;
+    /// let target = ArmTarget::Position(nalgebra::Point3::new(0.6, 0.0, 1.0));
+    /// let plan = arm.plan(world, &target, &[], &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+    /// let r = arm.execute(world, &plan, hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.tracking_error < 0.05);
+    /// # }
+    /// ```
+    pub fn execute(&mut self, world: &mut World, plan: &ArmPlan, execution: Execution) -> SkillResult<MotionReport> {
+        let mut report = plan.report.clone();
+        let dt = world.config().control_dt();
+        let duration = plan.trajectory.duration();
+        let motion_steps = (duration / dt).ceil() as usize;
+        let mut q = vec![0.0; self.chain.dof()];
+        plan.trajectory.sample(0.0, &mut q, None);
+        let turns = self.turns(world, &q)?;
+        match execution {
+            Execution::Kinematic => {
+                let (mut full, _) = self.configuration(world)?;
+                let commands = world.joint_commands(self.robot)?.to_vec();
+                for k in 1..=motion_steps {
+                    plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
+                    self.unwrap_to(&mut q, &turns);
+                    self.chain.scatter(&q, &mut full);
+                    world.reset_configuration(self.robot, &full)?;
+                    self.carry_held(world)?;
+                }
+                self.restore_commands(world, &commands)?;
+                for _ in 0..self.settings.settle_steps {
+                    world.step();
+                }
+                self.check_held(world)?;
+            }
+            Execution::Physics => {
+                let support = self.support_bodies(world)?;
+                for k in 1..=motion_steps + self.settings.settle_steps {
+                    plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
+                    self.unwrap_to(&mut q, &turns);
+                    self.command(world, &q)?;
+                    world.step();
+                    if let Some(hit) = self.unexpected_contact(world, &support, &[])? {
+                        self.hold_here(world)?;
+                        return Err(SkillError::Collision(format!("{hit} at t = {:.2} s", world.time())));
+                    }
+                    self.check_held(world)?;
+                }
+                let reached = self.measured(world)?;
+                let mut goal = vec![0.0; self.chain.dof()];
+                plan.trajectory.sample(duration, &mut goal, None);
+                self.unwrap_to(&mut goal, &turns);
+                report.tracking_error = reached
+                    .iter()
+                    .zip(&goal)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                if report.tracking_error > self.settings.tolerance {
+                    return Err(SkillError::NotFinished(format!(
+                        "largest joint error {:.3} after the motion (tolerance {:.3})",
+                        report.tracking_error, self.settings.tolerance
+                    )));
+                }
+            }
+        }
+        report.executed = true;
+        Ok(report)
+    }
+
+    /// Clamps bounded joints into their limits and shifts continuous joints by whole turns so
+    /// that the trajectory's start lands on the measured start `from` (a wrapped angle sent as
+    /// a target would spin the joint the long way round).
+    fn unwrap_to(&self, q: &mut [f64], turns: &[f64]) {
+        let (lo, hi) = (self.chain.lower(), self.chain.upper());
+        for (i, x) in q.iter_mut().enumerate() {
+            if self.chain.continuous()[i] {
+                *x += turns[i];
+            } else {
+                *x = x.clamp(lo[i], hi[i]);
+            }
+        }
+    }
+
+    /// The chain's joint positions as measured (continuous joints not wrapped).
+    fn measured(&self, world: &World) -> SkillResult<Vec<f64>> {
+        let mut c = vec![0.0; self.chain.dof()];
+        self.chain.gather(&world.joint_positions(self.robot)?, &mut c);
+        Ok(c)
+    }
+
+    /// Whole turns between a trajectory start and the measured chain configuration.
+    fn turns(&self, world: &World, start: &[f64]) -> SkillResult<Vec<f64>> {
+        let measured = self.measured(world)?;
+        Ok(measured
+            .iter()
+            .zip(start)
+            .zip(self.chain.continuous())
+            .map(|((m, s), &c)| {
+                if c {
+                    ((m - s) / std::f64::consts::TAU).round() * std::f64::consts::TAU
+                } else {
+                    0.0
+                }
+            })
+            .collect())
+    }
+
+    /// Position targets for the chain's joints.
+    fn command(&self, world: &mut World, q: &[f64]) -> SkillResult<()> {
+        let model = self.chain.model();
+        for (&v, &x) in self.chain.variables().iter().zip(q) {
+            world.set_joint_command(
+                self.robot,
+                &model.variable_names()[v],
+                JointCommand::Position { target: x },
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Holds the chain where it is now.
+    fn hold_here(&self, world: &mut World) -> SkillResult<()> {
+        let mut q = self.measured(world)?;
+        let zero = vec![0.0; q.len()];
+        self.unwrap_to(&mut q, &zero);
+        self.command(world, &q)
+    }
+
+    /// Re-installs the commands of joints outside the chain (a kinematic reset overwrote them).
+    fn restore_commands(&self, world: &mut World, commands: &[JointCommand]) -> SkillResult<()> {
+        let model = self.chain.model();
+        for (v, &c) in commands.iter().enumerate() {
+            if self.chain.variables().contains(&v) {
+                continue;
+            }
+            world.set_joint_command(self.robot, &model.variable_names()[v], c)?;
+        }
+        Ok(())
+    }
+
+    /// Moves a held object with the tip (kinematic execution).
+    fn carry_held(&self, world: &mut World) -> SkillResult<()> {
+        if let Some(h) = &self.held {
+            let pose = self.tip_pose(world)? * h.offset;
+            world.place(h.object, &pose)?;
+        }
+        Ok(())
+    }
+
+    /// Fails with `Slipped` when the held object has left the fingers: more than 3 cm from
+    /// where the grasp put it with fewer than two finger links touching it, or more than 8 cm
+    /// away at all (a pinched object may swing about the finger axis and stay held).
+    fn check_held(&self, world: &World) -> SkillResult<()> {
+        if let Some(h) = &self.held {
+            let expected = self.tip_pose(world)? * h.offset;
+            let actual = world.base_pose(h.object)?;
+            let off = (expected.translation.vector - actual.translation.vector).norm();
+            if off <= 0.03 {
+                return Ok(());
+            }
+            let mut links: Vec<String> = world
+                .contacts(self.robot)?
+                .into_iter()
+                .filter(|c| h.bodies.contains(&c.other) && c.link.contains("finger"))
+                .map(|c| c.link)
+                .collect();
+            links.sort_unstable();
+            links.dedup();
+            let fingers = links.len();
+            if fingers < 2 || off > 0.08 {
+                return Err(SkillError::Slipped(format!(
+                    "`{}` is {off:.3} m from where the gripper holds it, {fingers} finger(s) on it",
+                    h.name
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The first contact that pushes harder than `contact_force` on a link, other than the
+    /// support links on what they stand on, the held object, and `allowed` bodies.
+    fn unexpected_contact(&self, world: &World, support: &[BodyId], allowed: &[BodyId]) -> SkillResult<Option<String>> {
+        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
+        for c in world.contacts(self.robot)? {
+            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+            if on_support || held.contains(&c.other) || allowed.contains(&c.other) {
+                continue;
+            }
+            if c.force.norm() > self.settings.contact_force {
+                return Ok(Some(format!(
+                    "link `{}` touched `{}` ({:.1} N)",
+                    c.link,
+                    c.other_name,
+                    c.force.norm()
+                )));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The sum of contact forces on the arm's links (support contacts excluded), N.
+    fn arm_force(&self, world: &World, support: &[BodyId]) -> SkillResult<f64> {
+        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
+        Ok(world
+            .contacts(self.robot)?
+            .into_iter()
+            .filter(|c| {
+                let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+                !on_support && !held.contains(&c.other)
+            })
+            .map(|c| c.force.norm())
+            .sum())
+    }
+
+    /// The chain configurations of a straight-line move of the tip from where it is now, one
+    /// per IK step (the first is the current configuration), cut short before the first step
+    /// whose solution jumps, fails or collides; and the distance covered.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a zero or non-finite direction or distance.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::LinearMove;
+    /// let (states, covered) = arm.linear_path(world, &LinearMove::new(nalgebra::Vector3::z(), 0.1)).unwrap();
+    /// assert!(states.len() >= 1 && covered <= 0.1);
+    /// # }
+    /// ```
+    pub fn linear_path(&self, world: &World, m: &LinearMove) -> SkillResult<(Vec<Vec<f64>>, f64)> {
+        let n = m.direction.norm();
+        if !n.is_finite() || n < 1e-9 {
+            return Err(SkillError::BadInput(format!(
+                "linear move direction {:?} has no length",
+                m.direction
+            )));
+        }
+        for (what, x) in [("distance", m.distance), ("speed", m.speed), ("step", m.step)] {
+            if !x.is_finite() || x <= 0.0 {
+                return Err(SkillError::BadInput(format!("linear move {what} {x} must be positive")));
+            }
+        }
+        if !m.force_limit.is_finite() || m.force_limit <= 0.0 {
+            return Err(SkillError::BadInput(format!(
+                "linear move force limit {} must be positive",
+                m.force_limit
+            )));
+        }
+        let base = world.base_pose(self.robot)?;
+        let start_pose = base * self.start_tool_pose(world)?;
+        let dir = m.direction / n;
+        let steps = (m.distance / m.step).ceil().max(1.0) as usize;
+        let targets: Vec<Isometry3<f64>> = (1..=steps)
+            .map(|i| {
+                let s = m.distance * i as f64 / steps as f64;
+                Isometry3::from_parts(
+                    Translation3::from(start_pose.translation.vector + dir * s),
+                    start_pose.rotation,
+                )
+            })
+            .collect();
+        let states = self.ik_path(world, &targets, &m.ignore, m.check_world, None)?;
+        let covered = m.distance * (states.len() - 1) as f64 / steps as f64;
+        Ok((states, covered))
+    }
+
+    /// The tool pose of the current configuration in the robot's root frame.
+    fn start_tool_pose(&self, world: &World) -> SkillResult<Isometry3<f64>> {
+        let mut ik = self.ik(world, 1)?;
+        let (_, start) = self.configuration(world)?;
+        Ok(ik.tool_pose(&start)?)
+    }
+
+    /// Chain configurations through world tip poses by IK steps from the current
+    /// configuration (the first state), cut short before the first step whose solution fails,
+    /// jumps (> 0.2 rad in a joint) or collides. With a free axis (a point and direction in the
+    /// tip frame), each step may also turn the tip about it.
+    fn ik_path(
+        &self,
+        world: &World,
+        targets: &[Isometry3<f64>],
+        ignore: &[BodyId],
+        check_world: bool,
+        free_axis: Option<&(Point3<f64>, Vector3<f64>)>,
+    ) -> SkillResult<Vec<Vec<f64>>> {
+        let base = world.base_pose(self.robot)?;
+        let mut validity = if check_world {
+            self.validity(world, ignore, 0.0)?
+        } else {
+            self.checker(world, Arc::new(ParryScene::new(Vec::new())))?
+        };
+        // One attempt from the previous step (a restart would jump), patient enough to creep
+        // along a joint limit.
+        let mut ik = self.ik(world, 1)?;
+        ik.set_settings(IkSettings {
+            max_iterations: 150,
+            stall_iterations: 150,
+            position_tolerance: 0.002,
+            orientation_tolerance: 0.02,
+            ..ik.settings().clone()
+        });
+        let (_, start) = self.configuration(world)?;
+        let mut states = vec![start];
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(0);
+        // Turns about the free axis tried at each step, relative to the last one taken.
+        const WIGGLE: [f64; 7] = [0.0, 0.1, -0.1, 0.25, -0.25, 0.5, -0.5];
+        let tries: &[f64] = if free_axis.is_some() { &WIGGLE } else { &WIGGLE[..1] };
+        let mut turned = 0.0;
+        'steps: for target in targets {
+            check_finite_pose(target)?;
+            let prev = states.last().cloned().unwrap_or_default();
+            for &d in tries {
+                let turn = match free_axis {
+                    Some((p, axis)) => {
+                        let r = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(*axis), turned + d);
+                        Isometry3::from_parts(Translation3::from(p.coords), r)
+                            * Isometry3::from_parts(Translation3::from(-p.coords), UnitQuaternion::identity())
+                    }
+                    None => Isometry3::identity(),
+                };
+                let goal = IkTarget::Pose(base.inverse() * target * turn);
+                let solved = ik.solve_with(&goal, &prev, &mut rng, |q| {
+                    q.iter().zip(&prev).all(|(a, b)| (a - b).abs() < 0.2) && validity.is_valid(q)
+                });
+                if let Ok(sol) = solved {
+                    states.push(sol.q);
+                    turned += d;
+                    continue 'steps;
+                }
+            }
+            break;
+        }
+        Ok(states)
+    }
+
+    /// Moves the tip through world poses (small steps apart; a door handle's arc, a drawer's
+    /// pull) spending `m.step_time` on each, stopping early where the IK path ends or the
+    /// contact force on the arm passes `m.force_limit`.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
+    /// the first step is possible.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::PoseMove;
+    /// let tip = arm.tip_pose(world).unwrap();
+    /// let poses = (1..=10).map(|k| nalgebra::Isometry3::translation(0.0, 0.0, 0.01 * k as f64) * tip).collect();
+    /// let r = arm.move_through(world, &PoseMove::new(poses), hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.planned <= r.requested);
+    /// # }
+    /// ```
+    pub fn move_through(&mut self, world: &mut World, m: &PoseMove, execution: Execution) -> SkillResult<PoseReport> {
+        if m.poses.is_empty()
+            || !m.step_time.is_finite()
+            || m.step_time <= 0.0
+            || !m.force_limit.is_finite()
+            || m.force_limit <= 0.0
+        {
+            return Err(SkillError::BadInput(format!(
+                "pose move of {} poses, {} s per step, force limit {} is unusable",
+                m.poses.len(),
+                m.step_time,
+                m.force_limit
+            )));
+        }
+        let states = self.ik_path(world, &m.poses, &m.ignore, m.check_world, m.free_axis.as_ref())?;
+        if states.len() < 2 {
+            return Err(SkillError::Unreachable(
+                "not even the first pose of the move is reachable".into(),
+            ));
+        }
+        let (peak_force, stopped_by_force, duration) =
+            self.run_states(world, &states, m.step_time, m.force_limit, execution)?;
+        Ok(PoseReport {
+            planned: states.len() - 1,
+            requested: m.poses.len(),
+            peak_force,
+            stopped_by_force,
+            duration,
+        })
+    }
+
+    /// Executes chain states `segment` seconds apart (linear in between); returns the peak
+    /// arm force, whether the force limit stopped it, and the simulated time taken.
+    fn run_states(
+        &mut self,
+        world: &mut World,
+        states: &[Vec<f64>],
+        segment: f64,
+        force_limit: f64,
+        execution: Execution,
+    ) -> SkillResult<(f64, bool, f64)> {
+        let dt = world.config().control_dt();
+        let duration = segment * (states.len() - 1) as f64;
+        let steps = (duration / dt).ceil() as usize;
+        let support = self.support_bodies(world)?;
+        let commands = world.joint_commands(self.robot)?.to_vec();
+        let (mut full, _) = self.configuration(world)?;
+        let mut q = vec![0.0; self.chain.dof()];
+        let turns = self.turns(world, &states[0])?;
+        let t0 = world.time();
+        let (mut over, mut peak, mut stopped) = (0, 0.0_f64, false);
+        for k in 1..=steps + self.settings.settle_steps / 2 {
+            let t = (k as f64 * dt).min(duration) / segment;
+            let i = (t.floor() as usize).min(states.len() - 2);
+            let f = (t - i as f64).clamp(0.0, 1.0);
+            for (j, x) in q.iter_mut().enumerate() {
+                *x = states[i][j] + f * (states[i + 1][j] - states[i][j]);
+            }
+            self.unwrap_to(&mut q, &turns);
+            match execution {
+                Execution::Physics => self.command(world, &q)?,
+                Execution::Kinematic => {
+                    self.chain.scatter(&q, &mut full);
+                    world.reset_configuration(self.robot, &full)?;
+                    self.restore_commands(world, &commands)?;
+                    self.carry_held(world)?;
+                }
+            }
+            world.step();
+            let force = self.arm_force(world, &support)?;
+            peak = peak.max(force);
+            over = if force > force_limit { over + 1 } else { 0 };
+            if over >= 2 {
+                stopped = true;
+                self.hold_here(world)?;
+                break;
+            }
+        }
+        Ok((peak, stopped, world.time() - t0))
+    }
+
+    /// Moves the tip along a straight line (orientation kept) at `m.speed`, stopping at the
+    /// end of the IK path or when the contact force on the arm passes `m.force_limit`.
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a malformed move; [`SkillError::Unreachable`] when not even
+    /// the first IK step is possible.
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, arm: &mut hearth_skills::Arm) {
+    /// use hearth_skills::arm::LinearMove;
+    /// let up = LinearMove::new(nalgebra::Vector3::z(), 0.1);
+    /// let r = arm.move_linear(world, &up, hearth_skills::Execution::Physics).unwrap();
+    /// assert!(r.travelled <= 0.11);
+    /// # }
+    /// ```
+    pub fn move_linear(
+        &mut self,
+        world: &mut World,
+        m: &LinearMove,
+        execution: Execution,
+    ) -> SkillResult<LinearReport> {
+        let (states, planned) = self.linear_path(world, m)?;
+        if states.len() < 2 {
+            return Err(SkillError::Unreachable(format!(
+                "no straight-line step of {:.3} m is possible along {:?}",
+                m.step, m.direction
+            )));
+        }
+        let start_tip = self.tip_pose(world)?.translation.vector;
+        let dir = m.direction.normalize();
+        let segment = planned / (states.len() - 1) as f64 / m.speed;
+        let (peak_force, stopped_by_force, duration) =
+            self.run_states(world, &states, segment, m.force_limit, execution)?;
+        Ok(LinearReport {
+            planned,
+            travelled: (self.tip_pose(world)?.translation.vector - start_tip).dot(&dir),
+            peak_force,
+            stopped_by_force,
+            duration,
+        })
+    }
+}
+
+/// A tip orientation whose approach axis (+x) points along `approach` and whose +z is as close
+/// to world up as possible (world +x when `approach` is vertical), turned by `roll` about the
+/// approach axis.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// let r = hearth_skills::arm::approach_rotation(&Vector3::new(0.0, 0.0, -2.0), 0.0).unwrap();
+/// assert!((r * Vector3::x() - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-12);
+/// assert!(hearth_skills::arm::approach_rotation(&Vector3::zeros(), 0.0).is_err());
+/// ```
+///
+/// # Errors
+/// [`SkillError::BadInput`] for a zero or non-finite direction.
+pub fn approach_rotation(approach: &Vector3<f64>, roll: f64) -> SkillResult<UnitQuaternion<f64>> {
+    let n = approach.norm();
+    if !n.is_finite() || n < 1e-9 || !roll.is_finite() {
+        return Err(SkillError::BadInput(format!(
+            "approach direction {approach:?} (roll {roll}) is unusable"
+        )));
+    }
+    let x = approach / n;
+    let up = if x.z.abs() > 0.95 { Vector3::x() } else { Vector3::z() };
+    let z = (up - x * up.dot(&x)).normalize();
+    let y = z.cross(&x);
+    let r = nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_columns(&[x, y, z]));
+    Ok(UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_unchecked(x), roll)
+        * UnitQuaternion::from_rotation_matrix(&r))
+}
+
+fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {
+    let finite = p.translation.vector.iter().all(|x| x.is_finite()) && p.rotation.coords.iter().all(|x| x.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(SkillError::BadInput(format!("goal pose {p:?} is not finite")))
+    }
+}
+
+/// The path a plan's trajectory follows, sampled at `resolution` (for inspection).
+///
+/// ```no_run
+/// # fn f(arm: &hearth_skills::arm::Arm, plan: &hearth_skills::arm::ArmPlan) {
+/// let path = hearth_skills::arm::plan_path(arm, plan, 0.05);
+/// assert!(path.states.len() >= 2);
+/// # }
+/// ```
+pub fn plan_path(arm: &Arm, plan: &ArmPlan, resolution: f64) -> Path {
+    plan.trajectory.to_path(&arm.space, resolution)
+}
