@@ -583,7 +583,10 @@ impl EnvConfig {
         if t.uses_arm() && self.robot.name != "fetch" {
             return Err(bad(
                 "robot.name",
-                format!("task `{}` needs the `fetch` (an arm), not `{}`", t.name, self.robot.name),
+                format!(
+                    "task `{}` needs the `fetch` (an arm), not `{}`",
+                    t.name, self.robot.name
+                ),
             ));
         }
         self.validate_task_keys()?;
@@ -712,11 +715,7 @@ pub(crate) fn parse_asset(text: &str) -> Result<(Category, usize), String> {
         .parse()
         .map_err(|_| format!("`{v}` in `{text}` is not a variant number"))?;
     if variant >= category.variants() {
-        return Err(format!(
-            "`{text}`: {c} has variants 0 to {}",
-            category.variants() - 1
-        ));
+        return Err(format!("`{text}`: {c} has variants 0 to {}", category.variants() - 1));
     }
     Ok((category, variant))
 }
-

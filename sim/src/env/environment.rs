@@ -5,18 +5,18 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
+use super::arm::Arm;
 use super::config::EnvConfig;
 use super::error::{EnvError, EnvResult};
 use super::spaces::{DType, Obs, ObsData, Space};
-use super::arm::Arm;
 use super::tasks::{BuildContext, Ending, Metrics, ResetContext, StepContext, Task};
+use crate::assets::Category as AssetCategory;
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
     ModalitySet, OccupancyGrid, OccupancyGridSpec, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
 };
 use crate::world::{BUILDING_PREFIX, ModelHandle, Snapshot, World, WorldConfig};
-use crate::assets::Category as AssetCategory;
 
 /// What an env reports besides observations and reward.
 ///
@@ -172,7 +172,11 @@ impl Env {
                 robot,
             },
         )?;
-        let arm = if task.uses_arm() { Some(Arm::new(&world, robot)?) } else { None };
+        let arm = if task.uses_arm() {
+            Some(Arm::new(&world, robot)?)
+        } else {
+            None
+        };
         let names: Vec<&str> = config.sensors.modalities.iter().map(String::as_str).collect();
         let mut camera_set: ModalitySet = names.iter().filter_map(|n| n.parse::<Modality>().ok()).collect();
         if task.needs_seg() {
@@ -264,13 +268,7 @@ impl Env {
             world,
             robot,
             maps,
-            action_space: Space::boxed(
-                "action",
-                &[2 + arm.as_ref().map_or(0, Arm::len)],
-                DType::F32,
-                -1.0,
-                1.0,
-            ),
+            action_space: Space::boxed("action", &[2 + arm.as_ref().map_or(0, Arm::len)], DType::F32, -1.0, 1.0),
             task,
             arm,
             camera,
@@ -327,18 +325,44 @@ impl Env {
     }
 
     /// The task's name (`config.task.name`).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let env = Env::new(EnvConfig::from_toml("[task]\nname = \"point_nav_random\"\n")?)?;
+    /// assert_eq!(env.task_name(), "point_nav_random");
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn task_name(&self) -> &str {
         &self.config.task.name
     }
 
     /// The current episode's goal as a world point: the navigation goal (z = 0), the reaching
     /// goal of the gripper, the nearest instance of the `object_nav` category (z = 0), or the
-    /// front of the first piece of furniture of an articulated task (z = 0).
+    /// front of the piece of furniture an articulated task starts the robot at (z = 0).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"reaching\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// let [_, _, z] = env.goal();
+    /// assert!((0.5..=1.2).contains(&z));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn goal(&self) -> [f64; 3] {
         self.task.goal()
     }
 
     /// The category `object_nav` looks for this episode (`None` for other tasks).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[task]\nname = \"object_nav\"\ntarget_category = \"fridge\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// assert_eq!(env.target_category().map(|c| c.name()), Some("fridge"));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn target_category(&self) -> Option<AssetCategory> {
         match &self.task {
             Task::ObjectNav(t) => Some(t.category()),
@@ -348,6 +372,17 @@ impl Env {
 
     /// The furniture an articulated task closes this episode: (object name, joint names).
     /// Empty for other tasks.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"push_drawer\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// for (object, joints) in env.task_objects() {
+    ///     assert!(joints.iter().all(|j| j.starts_with("drawer_")), "{object}");
+    /// }
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn task_objects(&self) -> Vec<(String, Vec<String>)> {
         match &self.task {
             Task::Articulated(t) => t.targets(),
@@ -358,6 +393,16 @@ impl Env {
     /// The physics world, writable: for scripted set-ups and tests (teleporting the arm to a
     /// goal, closing a drawer). Nothing checks such changes against the task; the next
     /// [`Env::step`] scores whatever state it finds.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"reaching\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// let robot = env.robot();
+    /// env.world_mut().tuck(robot)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn world_mut(&mut self) -> &mut World {
         &mut self.world
     }
@@ -475,7 +520,10 @@ impl Env {
         }
         let want = self.action_space.size();
         if action.len() != want {
-            return Err(EnvError::BadAction(format!("expected {want} values, got {}", action.len())));
+            return Err(EnvError::BadAction(format!(
+                "expected {want} values, got {}",
+                action.len()
+            )));
         }
         if let Some(bad) = action.iter().find(|a| !a.is_finite()) {
             return Err(EnvError::BadAction(format!("non-finite entry {bad}")));

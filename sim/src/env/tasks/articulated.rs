@@ -11,7 +11,9 @@ use rand::RngExt;
 
 use super::field::{cell_center, nearest_free};
 use super::reaching::END_EFFECTOR;
-use super::{BuildContext, Ending, Metrics, Progress, ResetContext, StepContext, failure, in_base_frame, in_planar_frame};
+use super::{
+    BuildContext, Ending, Metrics, Progress, ResetContext, StepContext, failure, in_base_frame, in_planar_frame,
+};
 use crate::assets::Category;
 use crate::env::config::TaskConfig;
 use crate::env::error::{EnvError, EnvResult};
@@ -32,10 +34,23 @@ struct Target {
     pose: Isometry3<f64>,
     /// Front face, x in the object frame.
     front: f64,
-    /// How far open parts may reach out of the front (m).
-    reach: f64,
     /// (variable index, joint name, upper limit) of the joints to close (closed at 0).
     joints: Vec<(usize, String, f64)>,
+    /// Where the robot starts for this target (x, y, yaw), if it has floor in front.
+    start: Option<[f64; 3]>,
+}
+
+/// Footprint radius of the Fetch (m).
+const ROBOT_RADIUS: f64 = 0.32;
+
+/// The traversable cell nearest to a point `reach + robot radius + 10 cm` out of the front
+/// (within 1 m of it), facing the front.
+fn start_for(maps: &crate::scene::SceneMaps, pose: &Isometry3<f64>, front: f64, reach: f64) -> Option<[f64; 3]> {
+    let want = pose * Point3::new(front + reach + ROBOT_RADIUS + 0.1, 0.0, 0.0);
+    let cell = nearest_free(maps, [want.x, want.y], 1.0)?;
+    let p = cell_center(maps, cell);
+    let f = pose * Point3::new(front, 0.0, 0.0);
+    Some([p[0], p[1], (f.y - p[1]).atan2(f.x - p[0])])
 }
 
 /// The articulated task state of one episode.
@@ -54,9 +69,10 @@ pub(crate) struct Articulated {
     openings: Vec<f64>,
     scratch: Vec<f64>,
     pub(crate) start: [f64; 3],
+    /// The target the robot starts in front of.
+    focus: usize,
     progress: Progress,
     pub(crate) metrics: Metrics,
-    robot_radius: f64,
 }
 
 /// Which joints of a piece of furniture a task closes.
@@ -92,13 +108,15 @@ impl Articulated {
             }
             let depth = asset.aabb_max[0] - asset.aabb_min[0];
             let width = asset.aabb_max[1] - asset.aabb_min[1];
+            let pose = object.pose();
+            let reach = (0.8 * depth).max(0.5 * width);
             candidates.push(Target {
                 name: object.name.clone(),
                 room: object.room.clone(),
                 handle,
-                pose: object.pose(),
+                start: start_for(ctx.maps, &pose, asset.aabb_max[0], reach),
+                pose,
                 front: asset.aabb_max[0],
-                reach: (0.8 * depth).max(0.5 * width),
                 joints,
             });
         }
@@ -115,10 +133,7 @@ impl Articulated {
                 if !rooms.contains(&room.as_str()) {
                     return Err(EnvError::Config {
                         key: "task.room".into(),
-                        reason: format!(
-                            "room `{room}` has no {what} (rooms with some: {})",
-                            rooms.join(", ")
-                        ),
+                        reason: format!("room `{room}` has no {what} (rooms with some: {})", rooms.join(", ")),
                     });
                 }
                 rooms.retain(|r| r == room);
@@ -128,23 +143,40 @@ impl Articulated {
                 .map(|r| {
                     (0..candidates.len())
                         .filter(|&i| candidates[i].room.as_deref() == Some(r))
-                        .collect()
+                        .collect::<Vec<_>>()
                 })
+                .filter(|g| g.iter().any(|&i| candidates[i].start.is_some()))
                 .collect()
         } else if let Some(name) = &config.target_object {
-            let i = candidates.iter().position(|t| &t.name == name).ok_or_else(|| EnvError::Config {
-                key: "task.target_object".into(),
-                reason: format!(
-                    "`{name}` is not {what} of this home (candidates: {})",
-                    candidates.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
-                ),
-            })?;
+            let i = candidates
+                .iter()
+                .position(|t| &t.name == name)
+                .ok_or_else(|| EnvError::Config {
+                    key: "task.target_object".into(),
+                    reason: format!(
+                        "`{name}` is not {what} of this home (candidates: {})",
+                        candidates
+                            .iter()
+                            .map(|t| t.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                })?;
+            if candidates[i].start.is_none() {
+                return Err(EnvError::Task(format!("no floor in front of `{name}` for the robot")));
+            }
             vec![vec![i]]
         } else {
-            (0..candidates.len()).map(|i| vec![i]).collect()
+            (0..candidates.len())
+                .filter(|&i| candidates[i].start.is_some())
+                .map(|i| vec![i])
+                .collect()
         };
         if groups.is_empty() {
-            return Err(EnvError::Task(format!("`{}`: the home has no {what}", config.name)));
+            return Err(EnvError::Task(format!(
+                "`{}`: the home has no {what} with floor in front of it",
+                config.name
+            )));
         }
         Ok(Self {
             config,
@@ -155,9 +187,9 @@ impl Articulated {
             openings: Vec::new(),
             scratch: Vec::new(),
             start: [0.0; 3],
+            focus: 0,
             progress: Progress::default(),
             metrics: Metrics::default(),
-            robot_radius: 0.32,
         })
     }
 
@@ -177,12 +209,13 @@ impl Articulated {
             .collect()
     }
 
-    /// The front of the first target, on the floor.
+    /// The front of the target the robot starts at, on the floor.
     pub(crate) fn goal(&self) -> [f64; 3] {
-        self.active.first().map_or([0.0; 3], |&i| {
-            let f = self.front_point(i, 0.0);
-            [f[0], f[1], 0.0]
-        })
+        if self.candidates.is_empty() {
+            return [0.0; 3];
+        }
+        let f = self.front_point(self.focus, 0.0);
+        [f[0], f[1], 0.0]
     }
 
     /// A point `standoff` m out of target `i`'s front, world frame.
@@ -209,24 +242,22 @@ impl Articulated {
                 ctx.world.set_joint_command(t.handle, name, JointCommand::Off)?;
             }
         }
-        // In front of one of the targets (the first that has floor in front of it).
-        let first = ctx.rng.random_range(0..self.active.len());
-        for k in 0..self.active.len() {
-            let i = self.active[(first + k) % self.active.len()];
-            let standoff = self.candidates[i].reach + self.robot_radius + 0.1;
-            let want = self.front_point(i, standoff);
-            if let Some(cell) = nearest_free(ctx.maps, want, 0.75) {
-                let p = cell_center(ctx.maps, cell);
-                let o = self.candidates[i].pose.translation;
-                let yaw = (o.y - p[1]).atan2(o.x - p[0]);
-                self.start = [p[0], p[1], yaw];
-                return Ok(self.start);
-            }
+        // In front of one of the targets that has floor in front of it (groups have one).
+        let with_floor: Vec<usize> = self
+            .active
+            .iter()
+            .copied()
+            .filter(|&i| self.candidates[i].start.is_some())
+            .collect();
+        if with_floor.is_empty() {
+            return Err(EnvError::Task(format!(
+                "no floor in front of {} for the robot",
+                self.names.join(", ")
+            )));
         }
-        Err(EnvError::Task(format!(
-            "no floor in front of {} for the robot",
-            self.names.join(", ")
-        )))
+        self.focus = with_floor[ctx.rng.random_range(0..with_floor.len())];
+        self.start = self.candidates[self.focus].start.unwrap_or_default();
+        Ok(self.start)
     }
 
     /// Reads the openings and starts the potential.

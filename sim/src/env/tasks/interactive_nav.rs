@@ -73,7 +73,10 @@ impl InteractiveNav {
             .maps
             .shortest_path([start[0], start[1]], goal)
             .map_err(|e| EnvError::Task(format!("start {start:?} to goal {goal:?}: {e}")))?;
-        let length: f64 = path.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+        let length: f64 = path
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum();
         let n = self.obstacles.len();
         for (k, &h) in self.obstacles.iter().enumerate() {
             let s = length * (k + 1) as f64 / (n + 1) as f64;

@@ -97,7 +97,10 @@ impl ObjectNav {
         if targets.is_empty() {
             let (key, what) = match &config.target_category {
                 Some(name) => ("task.target_category", format!("the home has no `{name}`")),
-                None => ("task.target_category", "the home has none of the default categories".to_owned()),
+                None => (
+                    "task.target_category",
+                    "the home has none of the default categories".to_owned(),
+                ),
             };
             return Err(EnvError::Config {
                 key: key.into(),

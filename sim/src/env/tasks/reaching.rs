@@ -98,7 +98,9 @@ impl Reaching {
 
     /// Reward and ending of one step.
     pub(crate) fn step(&mut self, ctx: &StepContext<'_>) -> (f64, Option<Ending>) {
-        let d = self.end_effector(ctx).map_or(self.metrics.remaining, |ee| dist3(ee, self.goal));
+        let d = self
+            .end_effector(ctx)
+            .map_or(self.metrics.remaining, |ee| dist3(ee, self.goal));
         let mut reward = self.progress.step(&self.config, &mut self.metrics, ctx, d);
         let ending = if d < self.config.reach_tolerance {
             reward += self.config.success_reward;
