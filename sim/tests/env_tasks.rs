@@ -353,3 +353,45 @@ fn actions_of_the_wrong_length_are_refused() {
     assert!(matches!(env.step(&[0.0, 0.0]), Err(EnvError::BadAction(_))));
     assert_eq!(env.world().state_hash(), before);
 }
+
+#[test]
+fn pushing_an_obstacle_is_a_contact_not_a_collision() {
+    let mut env = Env::new(cheap("interactive_nav")).unwrap();
+    env.reset(6).unwrap();
+    let chair = model_named(&env, "obstacle_0_chair");
+    let c0 = env.world().base_pose(chair).unwrap().translation;
+    let (start, goal) = env.start_and_goal();
+    let path = env.maps().shortest_path([start[0], start[1]], goal).unwrap();
+    // Stand on the path where it first comes within 0.9 m of the chair, facing the chair.
+    let near = |p: [f64; 2]| (p[0] - c0.x).hypot(p[1] - c0.y) < 0.9;
+    let mut back = path[0];
+    'walk: for w in path.windows(2) {
+        let steps = ((w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) / 0.02).ceil().max(1.0) as usize;
+        for k in 0..steps {
+            let t = k as f64 / steps as f64;
+            let p = [w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1])];
+            if near(p) {
+                break 'walk;
+            }
+            back = p;
+        }
+    }
+    assert!(!near(path[0]), "the chair keeps clear of the start");
+    let robot = env.robot();
+    let z = env.world().base_pose(robot).unwrap().translation.z;
+    let yaw = (c0.y - back[1]).atan2(c0.x - back[0]);
+    let pose = Isometry3::from_parts(
+        Translation3::new(back[0], back[1], z),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+    );
+    env.world_mut().place(robot, &pose).unwrap();
+    let mut last = None;
+    for _ in 0..45 {
+        last = Some(env.step(&[1.0, 0.0]).unwrap());
+    }
+    let m = last.unwrap().info.metrics;
+    let c1 = env.world().base_pose(chair).unwrap().translation;
+    assert!(m.object_contacts > 0, "{m:?}");
+    assert!((c1.vector - c0.vector).norm() > 0.05, "the chair was pushed: {c0:?} → {c1:?}");
+    assert_eq!(m.collisions, 0, "{m:?}");
+}
