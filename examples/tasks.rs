@@ -29,7 +29,8 @@ fn main() -> Result<()> {
         config.sensors.camera.backend = "raycast".into();
         config.sensors.camera.width = 64;
         config.sensors.camera.height = 48;
-        config.episode.max_steps = 200;
+        // Navigation needs time to cover a home; the others are judged in a few seconds.
+        config.episode.max_steps = if task.contains("nav") { 600 } else { 200 };
         let mut env = Env::new(config)?;
         println!(
             "{task}: action size {}, observations {:?}",
@@ -114,7 +115,9 @@ impl Policy {
         let q = world.joint_positions(robot)?;
         ik.set_reference(&q)?;
         let g = env.goal();
-        let local = world.base_pose(robot)?.inverse_transform_point(&Point3::new(g[0], g[1], g[2]));
+        let local = world
+            .base_pose(robot)?
+            .inverse_transform_point(&Point3::new(g[0], g[1], g[2]));
         let mut seed = vec![0.0; chain.dof()];
         chain.gather(&q, &mut seed);
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
@@ -149,8 +152,10 @@ impl Policy {
                     _ => (heading_to(path[(*next).min(last)]), true),
                 };
                 let h = h as f32;
-                if h.abs() > 0.2 || !drive {
-                    action[1] = h.signum() * h.abs().min(1.0);
+                if !drive {
+                    action[1] = (2.0 * h).clamp(-1.0, 1.0);
+                } else if h.abs() > 0.2 {
+                    action[1] = h.signum();
                 } else {
                     action[0] = 1.0;
                     action[1] = 2.0 * h;

@@ -392,6 +392,9 @@ fn pushing_an_obstacle_is_a_contact_not_a_collision() {
     let m = last.unwrap().info.metrics;
     let c1 = env.world().base_pose(chair).unwrap().translation;
     assert!(m.object_contacts > 0, "{m:?}");
-    assert!((c1.vector - c0.vector).norm() > 0.05, "the chair was pushed: {c0:?} → {c1:?}");
+    assert!(
+        (c1.vector - c0.vector).norm() > 0.05,
+        "the chair was pushed: {c0:?} → {c1:?}"
+    );
     assert_eq!(m.collisions, 0, "{m:?}");
 }
