@@ -2,7 +2,7 @@
 //! reproducible, success is reported when the task's state is reached, bad task keys are
 //! errors naming the key.
 
-use hearth_sim::env::{Ending, Env, EnvConfig, EnvError, ObsData, TASK_NAMES};
+use hearth_sim::env::{Ending, Env, EnvConfig, EnvError, ObsData, TASK_NAMES, VecEnv};
 use hearth_sim::kinematics::{Chain, IkSettings, IkSolver, IkTarget};
 use hearth_sim::world::ModelHandle;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
@@ -397,4 +397,20 @@ fn pushing_an_obstacle_is_a_contact_not_a_collision() {
         "the chair was pushed: {c0:?} → {c1:?}"
     );
     assert_eq!(m.collisions, 0, "{m:?}");
+}
+
+#[test]
+fn vectorised_manipulation_envs_take_ten_values_each() {
+    let mut c = cheap("reaching");
+    c.episode.max_steps = 2;
+    let mut envs = VecEnv::new(&c, 2).unwrap();
+    envs.reset(3).unwrap();
+    assert!(matches!(envs.step(&[0.0; 4]), Err(EnvError::BadAction(_))));
+    let mut actions = vec![0.0f32; 20];
+    actions[12] = 1.0; // env 1: torso up
+    let s = envs.step(&actions).unwrap();
+    assert_eq!(s.obs.get("proprioception").unwrap().len(), 20);
+    assert_eq!(s.obs.get("task_obs").unwrap().len(), 18);
+    let s = envs.step(&actions).unwrap();
+    assert!(s.truncated.iter().all(|&t| t), "both hit the 2-step limit");
 }
