@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use super::error::{EnvError, EnvResult};
+use crate::assets::Category;
 
 /// Where the home comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -81,11 +82,11 @@ impl Default for RobotConfig {
     }
 }
 
-/// The task and its reward.
+/// The task and its reward (see `docs/env.md` for which keys each task reads).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskConfig {
-    /// `point_nav_fixed` or `point_nav_random`.
+    /// One of [`TASK_NAMES`].
     pub name: String,
     /// Fixed start (x, y, yaw) for `point_nav_fixed`.
     #[serde(default)]
@@ -93,16 +94,17 @@ pub struct TaskConfig {
     /// Fixed goal (x, y) for `point_nav_fixed`.
     #[serde(default)]
     pub goal: Option<[f64; 2]>,
-    /// Success when the base is this close to the goal (m; iGibson: 0.36).
+    /// Navigation success when the base is this close to the goal (m; iGibson: 0.36).
     #[serde(default = "default_tolerance")]
     pub goal_tolerance: f64,
-    /// Geodesic start–goal distance range (m) for `point_nav_random`.
+    /// Geodesic start–goal distance range (m) for `point_nav_random`, `interactive_nav` and
+    /// `object_nav` (distance to the nearest view of the category).
     #[serde(default = "default_geodesic_range")]
     pub geodesic_range: [f64; 2],
-    /// Potential the shaping reward follows: `geodesic` or `l2`.
+    /// Potential the navigation shaping reward follows: `geodesic` or `l2`.
     #[serde(default = "default_potential")]
     pub potential: String,
-    /// Weight of the potential reward (per metre of progress).
+    /// Weight of the potential reward (per metre of progress, or per unit of total opening).
     #[serde(default = "one")]
     pub potential_weight: f64,
     /// Penalty per step with a collision (subtracted).
@@ -114,6 +116,46 @@ pub struct TaskConfig {
     /// Terminate after this many collision steps (0: never).
     #[serde(default)]
     pub max_collisions: u32,
+    /// `object_nav`: the category to find (e.g. `fridge`); absent: each episode draws one of
+    /// the large-furniture categories present in the home.
+    #[serde(default)]
+    pub target_category: Option<String>,
+    /// `object_nav`: success when the category covers at least this fraction of the `seg`
+    /// image.
+    #[serde(default = "default_visibility")]
+    pub visible_fraction: f64,
+    /// `interactive_nav`: movable obstacles placed on the shortest path each episode, as
+    /// `category/variant` of the asset library.
+    #[serde(default = "default_obstacles")]
+    pub obstacles: Vec<String>,
+    /// `reaching`: goal distance ahead of the start (m, along the robot's heading).
+    #[serde(default = "default_goal_ahead")]
+    pub goal_ahead: [f64; 2],
+    /// `reaching`: largest sideways goal offset (m, either side).
+    #[serde(default = "default_goal_lateral")]
+    pub goal_lateral: f64,
+    /// `reaching`: goal height above the floor (m).
+    #[serde(default = "default_goal_height")]
+    pub goal_height: [f64; 2],
+    /// `reaching`: success when the gripper is this close to the goal (m; iGibson: 0.1).
+    #[serde(default = "default_reach_tolerance")]
+    pub reach_tolerance: f64,
+    /// `push_drawer`, `push_cabinet`: the object to close (a scene object name); absent: each
+    /// episode draws one of the home's bottom cabinets with drawers (doors).
+    #[serde(default)]
+    pub target_object: Option<String>,
+    /// `room_rearrangement`: the room (a scene room name); absent: each episode draws a room
+    /// with articulated furniture.
+    #[serde(default)]
+    pub room: Option<String>,
+    /// Articulated tasks: each joint is opened at reset to a uniform fraction of its range in
+    /// this interval.
+    #[serde(default = "default_open_range")]
+    pub open_range: [f64; 2],
+    /// Articulated tasks: a joint counts as closed within this fraction of its range from its
+    /// closed limit.
+    #[serde(default = "default_closed_tolerance")]
+    pub closed_tolerance: f64,
 }
 
 fn default_tolerance() -> f64 {
@@ -134,6 +176,78 @@ fn default_collision_penalty() -> f64 {
 fn default_success() -> f64 {
     10.0
 }
+fn default_visibility() -> f64 {
+    0.05
+}
+fn default_obstacles() -> Vec<String> {
+    vec!["chair/0".into(), "chair/1".into()]
+}
+fn default_goal_ahead() -> [f64; 2] {
+    [0.4, 0.9]
+}
+fn default_goal_lateral() -> f64 {
+    0.3
+}
+fn default_goal_height() -> [f64; 2] {
+    [0.5, 1.2]
+}
+fn default_reach_tolerance() -> f64 {
+    0.1
+}
+fn default_open_range() -> [f64; 2] {
+    [0.3, 1.0]
+}
+fn default_closed_tolerance() -> f64 {
+    0.05
+}
+
+impl TaskConfig {
+    /// A task of this name with every other key at its default.
+    ///
+    /// ```
+    /// let t = hearth_sim::env::TaskConfig::named("reaching");
+    /// assert_eq!(t.reach_tolerance, 0.1);
+    /// ```
+    pub fn named(name: &str) -> Self {
+        Self {
+            name: name.to_owned(),
+            start: None,
+            goal: None,
+            goal_tolerance: default_tolerance(),
+            geodesic_range: default_geodesic_range(),
+            potential: default_potential(),
+            potential_weight: one(),
+            collision_penalty: default_collision_penalty(),
+            success_reward: default_success(),
+            max_collisions: 0,
+            target_category: None,
+            visible_fraction: default_visibility(),
+            obstacles: default_obstacles(),
+            goal_ahead: default_goal_ahead(),
+            goal_lateral: default_goal_lateral(),
+            goal_height: default_goal_height(),
+            reach_tolerance: default_reach_tolerance(),
+            target_object: None,
+            room: None,
+            open_range: default_open_range(),
+            closed_tolerance: default_closed_tolerance(),
+        }
+    }
+
+    /// Whether the task moves the arm (its action has arm joint velocities after (v, ω)).
+    ///
+    /// ```
+    /// use hearth_sim::env::TaskConfig;
+    /// assert!(TaskConfig::named("push_drawer").uses_arm());
+    /// assert!(!TaskConfig::named("object_nav").uses_arm());
+    /// ```
+    pub fn uses_arm(&self) -> bool {
+        ARM_TASKS.contains(&self.name.as_str())
+    }
+}
+
+/// Tasks that need the Fetch and move its arm.
+const ARM_TASKS: [&str; 4] = ["reaching", "push_drawer", "push_cabinet", "room_rearrangement"];
 
 /// Camera settings for the `rgb`, `depth`, … observations.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -372,7 +486,16 @@ pub const OBSERVATION_NAMES: [&str; 14] = [
 ];
 
 /// Task names.
-pub const TASK_NAMES: [&str; 2] = ["point_nav_fixed", "point_nav_random"];
+pub const TASK_NAMES: [&str; 8] = [
+    "point_nav_fixed",
+    "point_nav_random",
+    "object_nav",
+    "interactive_nav",
+    "reaching",
+    "push_drawer",
+    "push_cabinet",
+    "room_rearrangement",
+];
 
 fn bad(key: &str, reason: impl Into<String>) -> EnvError {
     EnvError::Config {
@@ -457,6 +580,16 @@ impl EnvConfig {
                 format!("[{lo}, {hi}] is not an increasing range ≥ 0"),
             ));
         }
+        if t.uses_arm() && self.robot.name != "fetch" {
+            return Err(bad(
+                "robot.name",
+                format!(
+                    "task `{}` needs the `fetch` (an arm), not `{}`",
+                    t.name, self.robot.name
+                ),
+            ));
+        }
+        self.validate_task_keys()?;
         if !matches!(t.potential.as_str(), "geodesic" | "l2") {
             return Err(bad(
                 "task.potential",
@@ -512,4 +645,77 @@ impl EnvConfig {
         }
         Ok(())
     }
+
+    /// Checks the keys of the newer tasks (ranges, names of categories and assets).
+    fn validate_task_keys(&self) -> EnvResult<()> {
+        let t = &self.task;
+        if let Some(c) = &t.target_category {
+            match Category::from_name(c) {
+                Some(cat) if !matches!(cat, Category::Door | Category::Window | Category::Rug) => {}
+                _ => {
+                    return Err(bad(
+                        "task.target_category",
+                        format!("`{c}` is not an object category to look for (e.g. fridge, bed, sofa)"),
+                    ));
+                }
+            }
+        }
+        if !(t.visible_fraction.is_finite() && t.visible_fraction > 0.0 && t.visible_fraction <= 1.0) {
+            return Err(bad(
+                "task.visible_fraction",
+                format!("{} is not a fraction in (0, 1]", t.visible_fraction),
+            ));
+        }
+        for o in &t.obstacles {
+            parse_asset(o).map_err(|reason| bad("task.obstacles", reason))?;
+        }
+        for (key, [lo, hi], min) in [
+            ("task.goal_ahead", t.goal_ahead, 0.0),
+            ("task.goal_height", t.goal_height, 0.0),
+            ("task.open_range", t.open_range, 0.0),
+        ] {
+            if !(lo.is_finite() && hi.is_finite() && lo >= min && hi >= lo) {
+                return Err(bad(key, format!("[{lo}, {hi}] is not a range ≥ {min}")));
+            }
+        }
+        if t.open_range[1] > 1.0 {
+            return Err(bad("task.open_range", "fractions of a joint's range must be ≤ 1"));
+        }
+        if !(t.goal_lateral.is_finite() && t.goal_lateral >= 0.0) {
+            return Err(bad("task.goal_lateral", format!("{} is not ≥ 0", t.goal_lateral)));
+        }
+        positive("task.reach_tolerance", t.reach_tolerance)?;
+        if !(t.closed_tolerance.is_finite() && t.closed_tolerance > 0.0 && t.closed_tolerance < 1.0) {
+            return Err(bad(
+                "task.closed_tolerance",
+                format!("{} is not a fraction in (0, 1)", t.closed_tolerance),
+            ));
+        }
+        let articulated = matches!(t.name.as_str(), "push_drawer" | "push_cabinet" | "room_rearrangement");
+        if articulated && t.closed_tolerance >= t.open_range[0] {
+            return Err(bad(
+                "task.closed_tolerance",
+                format!(
+                    "{} would count joints opened to {} of their range as closed",
+                    t.closed_tolerance, t.open_range[0]
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Parses `category/variant` (e.g. `chair/1`) into a category and a variant it has.
+pub(crate) fn parse_asset(text: &str) -> Result<(Category, usize), String> {
+    let (c, v) = text
+        .split_once('/')
+        .ok_or_else(|| format!("`{text}` is not `category/variant` (e.g. `chair/0`)"))?;
+    let category = Category::from_name(c).ok_or_else(|| format!("`{c}` in `{text}` is not an asset category"))?;
+    let variant: usize = v
+        .parse()
+        .map_err(|_| format!("`{v}` in `{text}` is not a variant number"))?;
+    if variant >= category.variants() {
+        return Err(format!("`{text}`: {c} has variants 0 to {}", category.variants() - 1));
+    }
+    Ok((category, variant))
 }

@@ -5,11 +5,12 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
+use super::arm::Arm;
 use super::config::EnvConfig;
 use super::error::{EnvError, EnvResult};
 use super::spaces::{DType, Obs, ObsData, Space};
-use super::task::{Ending, Metrics, PointNav};
-use crate::assets::Category;
+use super::tasks::{BuildContext, Ending, Metrics, ResetContext, StepContext, Task};
+use crate::assets::Category as AssetCategory;
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
@@ -59,10 +60,13 @@ struct LidarRig {
 }
 
 /// One environment: a home in the physics world, a wheeled robot under differential drive,
-/// the configured sensors, and a point-navigation task.
+/// the configured sensors, and a task (see the [module docs](super) and `docs/env.md`).
 ///
 /// Action: a box in [−1, 1]² scaled to (linear, angular) velocity by `robot.max_linear_speed`
-/// and `robot.max_angular_speed`. Each step is `physics.substeps` physics steps.
+/// and `robot.max_angular_speed`; for the manipulation tasks (`reaching`, `push_drawer`,
+/// `push_cabinet`, `room_rearrangement`) 8 more entries command the Fetch's torso and arm
+/// joint velocities as fractions of their limits. Each step is `physics.substeps` physics
+/// steps.
 ///
 /// ```no_run
 /// use hearth_sim::env::{Env, EnvConfig};
@@ -80,7 +84,8 @@ pub struct Env {
     /// The settled world with the robot, restored at every reset.
     home: Snapshot,
     maps: SceneMaps,
-    task: PointNav,
+    task: Task,
+    arm: Option<Arm>,
     camera: Option<Camera>,
     camera_set: ModalitySet,
     lidar: Option<LidarRig>,
@@ -91,6 +96,8 @@ pub struct Env {
     rng: Pcg64Mcg,
     episode_seed: u64,
     started: bool,
+    /// Scratch for `task_obs`.
+    task_obs: Vec<f32>,
 }
 
 impl std::fmt::Debug for Env {
@@ -155,8 +162,27 @@ impl Env {
                 ..MapOptions::default()
             },
         )?;
+        let task = Task::new(
+            &config.task,
+            BuildContext {
+                home: &home,
+                loaded: &loaded,
+                world: &mut world,
+                maps: &maps,
+                robot,
+            },
+        )?;
+        let arm = if task.uses_arm() {
+            Some(Arm::new(&world, robot)?)
+        } else {
+            None
+        };
         let names: Vec<&str> = config.sensors.modalities.iter().map(String::as_str).collect();
-        let camera_set: ModalitySet = names.iter().filter_map(|n| n.parse::<Modality>().ok()).collect();
+        let mut camera_set: ModalitySet = names.iter().filter_map(|n| n.parse::<Modality>().ok()).collect();
+        if task.needs_seg() {
+            // object_nav judges success on the semantic image, listed or not.
+            camera_set = camera_set.with(Modality::Seg);
+        }
         let camera = if camera_set.is_empty() {
             None
         } else {
@@ -233,7 +259,7 @@ impl Env {
         let rug_names = home
             .objects
             .iter()
-            .filter(|o| o.category == Category::Rug.name())
+            .filter(|o| o.category == AssetCategory::Rug.name())
             .map(|o| o.name.clone())
             .collect();
         let mut env = Self {
@@ -242,12 +268,14 @@ impl Env {
             world,
             robot,
             maps,
-            task: PointNav::new(config.task.clone()),
+            action_space: Space::boxed("action", &[2 + arm.as_ref().map_or(0, Arm::len)], DType::F32, -1.0, 1.0),
+            task,
+            arm,
             camera,
             camera_set,
             lidar,
             spaces: Vec::new(),
-            action_space: Space::boxed("action", &[2], DType::F32, -1.0, 1.0),
+            task_obs: Vec::new(),
             rng: Pcg64Mcg::seed_from_u64(0),
             episode_seed: 0,
             started: false,
@@ -262,7 +290,8 @@ impl Env {
         &self.spaces
     }
 
-    /// The action space: (linear, angular) in [−1, 1].
+    /// The action space: (linear, angular) in [−1, 1], then for the manipulation tasks the
+    /// velocities of the torso and the 7 arm joints in [−1, 1] (fractions of their limits).
     pub fn action_space(&self) -> &Space {
         &self.action_space
     }
@@ -288,9 +317,94 @@ impl Env {
         &self.maps
     }
 
-    /// Start (x, y, yaw) and goal (x, y) of the current episode.
+    /// Start (x, y, yaw) and goal (x, y) of the current episode (for tasks without a point
+    /// goal, the (x, y) of [`Env::goal`]).
     pub fn start_and_goal(&self) -> ([f64; 3], [f64; 2]) {
-        (self.task.start, self.task.goal)
+        let g = self.task.goal();
+        (self.task.start(), [g[0], g[1]])
+    }
+
+    /// The task's name (`config.task.name`).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let env = Env::new(EnvConfig::from_toml("[task]\nname = \"point_nav_random\"\n")?)?;
+    /// assert_eq!(env.task_name(), "point_nav_random");
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn task_name(&self) -> &str {
+        &self.config.task.name
+    }
+
+    /// The current episode's goal as a world point: the navigation goal (z = 0), the reaching
+    /// goal of the gripper, the nearest instance of the `object_nav` category (z = 0), or the
+    /// front of the piece of furniture an articulated task starts the robot at (z = 0).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"reaching\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// let [_, _, z] = env.goal();
+    /// assert!((0.5..=1.2).contains(&z));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn goal(&self) -> [f64; 3] {
+        self.task.goal()
+    }
+
+    /// The category `object_nav` looks for this episode (`None` for other tasks).
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[task]\nname = \"object_nav\"\ntarget_category = \"fridge\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// assert_eq!(env.target_category().map(|c| c.name()), Some("fridge"));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn target_category(&self) -> Option<AssetCategory> {
+        match &self.task {
+            Task::ObjectNav(t) => Some(t.category()),
+            _ => None,
+        }
+    }
+
+    /// The furniture an articulated task closes this episode: (object name, joint names).
+    /// Empty for other tasks.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"push_drawer\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// for (object, joints) in env.task_objects() {
+    ///     assert!(joints.iter().all(|j| j.starts_with("drawer_")), "{object}");
+    /// }
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn task_objects(&self) -> Vec<(String, Vec<String>)> {
+        match &self.task {
+            Task::Articulated(t) => t.targets(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// The physics world, writable: for scripted set-ups and tests (teleporting the arm to a
+    /// goal, closing a drawer). Nothing checks such changes against the task; the next
+    /// [`Env::step`] scores whatever state it finds.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[robot]\nname = \"fetch\"\n[task]\nname = \"reaching\"\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// let robot = env.robot();
+    /// env.world_mut().tuck(robot)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
     }
 
     fn describe(&self) -> Vec<Space> {
@@ -319,8 +433,14 @@ impl Env {
                     let n = self.config.sensors.lidar.grid_size;
                     Space::boxed("occupancy_grid", &[n, n, 1], DType::F32, 0.0, 1.0)
                 }
-                "task_obs" => Space::boxed("task_obs", &[5], DType::F32, f64::MIN, f64::MAX),
-                "proprioception" => Space::boxed("proprioception", &[2], DType::F32, f64::MIN, f64::MAX),
+                "task_obs" => Space::boxed("task_obs", &[self.task.obs_len()], DType::F32, f64::MIN, f64::MAX),
+                "proprioception" => Space::boxed(
+                    "proprioception",
+                    &[2 + self.arm.as_ref().map_or(0, Arm::len)],
+                    DType::F32,
+                    f64::MIN,
+                    f64::MAX,
+                ),
                 "bump" => Space::boxed("bump", &[1], DType::F32, 0.0, 1.0),
                 _ => continue,
             };
@@ -335,8 +455,8 @@ impl Env {
         l.as_ref().map_or(0, |(l, _, _)| l.spec().rays())
     }
 
-    /// Starts an episode: restores the settled home, lets the task pick start and goal (from
-    /// `seed`), places the robot, and observes.
+    /// Starts an episode: restores the settled home, lets the task pick the start (and goal,
+    /// target, open joints, obstacles) from `seed`, places the robot, and observes.
     ///
     /// # Errors
     /// [`EnvError::Task`] when no start and goal fit the task; sensor errors.
@@ -344,8 +464,11 @@ impl Env {
         self.world.restore(&self.home)?;
         self.rng = Pcg64Mcg::seed_from_u64(seed);
         self.episode_seed = seed;
-        self.task.reset(&self.maps, &mut self.rng)?;
-        let [x, y, yaw] = self.task.start;
+        let [x, y, yaw] = self.task.reset(ResetContext {
+            world: &mut self.world,
+            maps: &self.maps,
+            rng: &mut self.rng,
+        })?;
         let z = self.world.base_pose(self.robot)?.translation.z;
         let pose = Isometry3::from_parts(
             Translation3::new(x, y, z),
@@ -361,12 +484,24 @@ impl Env {
                 l.reseed(seed);
             }
         }
+        self.sense()?;
+        let base = self.world.base_pose(self.robot)?;
+        let ctx = StepContext {
+            world: &self.world,
+            robot: self.robot,
+            base,
+            collided: false,
+            touched: false,
+            on_map: true,
+            seg: seg_of(&self.task, self.camera.as_ref()),
+        };
+        self.task.begin(&ctx)?;
         self.started = true;
         let obs = self.observe(false)?;
         Ok((
             obs,
             Info {
-                metrics: self.task.metrics,
+                metrics: self.task.metrics(),
                 ending: None,
                 collision: false,
                 episode_seed: seed,
@@ -383,8 +518,12 @@ impl Env {
         if !self.started {
             return Err(EnvError::NotReset);
         }
-        if action.len() != 2 {
-            return Err(EnvError::BadAction(format!("expected 2 values, got {}", action.len())));
+        let want = self.action_space.size();
+        if action.len() != want {
+            return Err(EnvError::BadAction(format!(
+                "expected {want} values, got {}",
+                action.len()
+            )));
         }
         if let Some(bad) = action.iter().find(|a| !a.is_finite()) {
             return Err(EnvError::BadAction(format!("non-finite entry {bad}")));
@@ -393,13 +532,26 @@ impl Env {
         let v = action[0].clamp(-1.0, 1.0) as f64 * r.max_linear_speed;
         let w = action[1].clamp(-1.0, 1.0) as f64 * r.max_angular_speed;
         self.world.drive(self.robot, v, w)?;
+        if let Some(arm) = &mut self.arm {
+            arm.apply(&mut self.world, self.robot, &action[2..])?;
+        }
         self.world.step();
-        let collided = self.collided()?;
-        let pose = self.world.base_pose(self.robot)?;
-        let xy = [pose.translation.x, pose.translation.y];
-        let on_map = self.maps.cell_of(xy).is_some() && pose.translation.z > -0.5;
-        let (reward, ending) = self.task.step(xy, collided, on_map);
-        let truncated = ending.is_none() && self.task.metrics.episode_length >= self.config.episode.max_steps;
+        let (collided, touched) = self.contacts()?;
+        self.sense()?;
+        let base = self.world.base_pose(self.robot)?;
+        let on_map = self.maps.cell_of([base.translation.x, base.translation.y]).is_some() && base.translation.z > -0.5;
+        let ctx = StepContext {
+            world: &self.world,
+            robot: self.robot,
+            base,
+            collided,
+            touched,
+            on_map,
+            seg: seg_of(&self.task, self.camera.as_ref()),
+        };
+        let (reward, ending) = self.task.step(&ctx);
+        let metrics = self.task.metrics();
+        let truncated = ending.is_none() && metrics.episode_length >= self.config.episode.max_steps;
         let ending = ending.or(truncated.then_some(Ending::Timeout));
         let obs = self.observe(collided)?;
         Ok(Step {
@@ -408,7 +560,7 @@ impl Env {
             terminated: ending.is_some() && !truncated,
             truncated,
             info: Info {
-                metrics: self.task.metrics,
+                metrics,
                 ending,
                 collision: collided,
                 episode_seed: self.episode_seed,
@@ -416,8 +568,9 @@ impl Env {
         })
     }
 
-    /// Whether the robot touches anything but the floor (rugs count as floor).
-    fn collided(&self) -> EnvResult<bool> {
+    /// Whether the robot touches anything but the floor, rugs and the task's objects (a
+    /// collision), and whether it touches one of the task's objects.
+    fn contacts(&self) -> EnvResult<(bool, bool)> {
         let floor = |name: &str| {
             let model = name.split('/').next().unwrap_or(name);
             name == "ground"
@@ -426,14 +579,24 @@ impl Env {
                     .is_some_and(|rest| rest.starts_with("floor/"))
                 || self.rug_names.iter().any(|r| r == model)
         };
-        Ok(self
-            .world
-            .contacts(self.robot)?
-            .iter()
-            .any(|c| c.force.norm() > 0.0 && !floor(&c.other_name)))
+        let own = self.task.own_objects();
+        let (mut collided, mut touched) = (false, false);
+        for c in self.world.contacts(self.robot)?.iter().filter(|c| c.force.norm() > 0.0) {
+            if floor(&c.other_name) {
+                continue;
+            }
+            let model = c.other_name.split('/').next().unwrap_or(&c.other_name);
+            if own.iter().any(|o| o == model) {
+                touched = true;
+            } else {
+                collided = true;
+            }
+        }
+        Ok((collided, touched))
     }
 
-    fn observe(&mut self, bump: bool) -> EnvResult<Obs> {
+    /// Renders the camera and scans the LiDARs.
+    fn sense(&mut self) -> EnvResult<()> {
         if let Some(camera) = &mut self.camera {
             camera.render(&self.world, self.camera_set)?;
         }
@@ -447,14 +610,30 @@ impl Env {
                 grid.update(scan, &rig.sensor_in_base)?;
             }
         }
+        Ok(())
+    }
+
+    /// Assembles the observations from what [`Env::sense`] measured.
+    fn observe(&mut self, bump: bool) -> EnvResult<Obs> {
         let pose = self.world.base_pose(self.robot)?;
         let twist = self.world.base_twist(self.robot)?;
         let yaw = pose.rotation.euler_angles().2;
-        let xy = [pose.translation.x, pose.translation.y];
         // Forward speed and yaw rate in the base frame.
         let (s, c) = yaw.sin_cos();
         let v = c * twist.linear.x + s * twist.linear.y;
         let omega = twist.angular.z;
+        {
+            let ctx = StepContext {
+                world: &self.world,
+                robot: self.robot,
+                base: pose,
+                collided: bump,
+                touched: false,
+                on_map: true,
+                seg: None,
+            };
+            self.task.task_obs(&ctx, v, omega, &mut self.task_obs);
+        }
         let mut obs = Obs::default();
         for space in &self.spaces {
             let data = match space.name.as_str() {
@@ -480,8 +659,14 @@ impl Env {
                     }
                     ObsData::F32(out)
                 }
-                "task_obs" => ObsData::F32(self.task.task_obs(xy, yaw, v, omega).to_vec()),
-                "proprioception" => ObsData::F32(vec![v as f32, omega as f32]),
+                "task_obs" => ObsData::F32(self.task_obs.clone()),
+                "proprioception" => {
+                    let mut out = vec![v as f32, omega as f32];
+                    if let Some(arm) = &self.arm {
+                        arm.positions(&self.world, self.robot, &mut out)?;
+                    }
+                    ObsData::F32(out)
+                }
                 "bump" => ObsData::F32(vec![if bump { 1.0 } else { 0.0 }]),
                 name => {
                     let camera = self.camera.as_ref().expect("camera observations come with a camera");
@@ -501,6 +686,15 @@ impl Env {
             obs.entries.push((space.name.clone(), data));
         }
         Ok(obs)
+    }
+}
+
+/// The semantic image, for the tasks that read it.
+fn seg_of<'a>(task: &Task, camera: Option<&'a Camera>) -> Option<&'a [u32]> {
+    if task.needs_seg() {
+        camera.map(|c| c.frame().seg.as_slice())
+    } else {
+        None
     }
 }
 

@@ -2,15 +2,22 @@
 //! `step(action) -> Step`), configured by a TOML file ([`EnvConfig`]), with declared
 //! observation and action [`Space`]s, and [`VecEnv`] for many envs in one process.
 //!
-//! Tasks: `point_nav_fixed` and `point_nav_random` (iGibson's point-goal navigation: potential
-//! reward on the geodesic or straight-line distance, collision penalty, success reward; SPL,
-//! path length and collisions in `info`).
+//! Tasks (iGibson's definitions of rewards, terminations and metrics; `docs/env.md` has the
+//! details):
+//! - `point_nav_fixed`, `point_nav_random`: reach a point; potential reward on the geodesic or
+//!   straight-line distance, collision penalty, success reward; SPL, path length, collisions.
+//! - `object_nav`: reach a view where a category covers 5 % of the semantic image.
+//! - `interactive_nav`: point navigation with movable obstacles on the path.
+//! - `reaching`: the Fetch's gripper to a 3-D goal (arm velocities in the action).
+//! - `push_drawer`, `push_cabinet`, `room_rearrangement`: close drawers and doors opened at
+//!   reset.
 
+mod arm;
 mod config;
 mod environment;
 mod error;
 mod spaces;
-mod task;
+mod tasks;
 mod vector;
 
 pub use config::{
@@ -20,5 +27,5 @@ pub use config::{
 pub use environment::{Env, Info, Step};
 pub use error::{EnvError, EnvResult};
 pub use spaces::{DType, Obs, ObsData, Space};
-pub use task::{Ending, Metrics};
+pub use tasks::{Ending, Metrics};
 pub use vector::{BatchedObs, VecEnv, VecStep};

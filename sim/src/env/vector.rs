@@ -139,17 +139,19 @@ impl VecEnv {
         Ok(BatchedObs::from(&obs))
     }
 
-    /// Steps every env with its slice of `actions` (2 values per env, env-major).
+    /// Steps every env with its slice of `actions` (the action space's size per env,
+    /// env-major).
     ///
     /// # Errors
     /// [`EnvError::BadAction`] for a wrong total length (nothing is stepped), or the first env
     /// error.
     pub fn step(&mut self, actions: &[f32]) -> EnvResult<VecStep> {
         let n = self.envs.len();
-        if actions.len() != 2 * n {
+        let per = self.envs[0].action_space().size();
+        if actions.len() != per * n {
             return Err(EnvError::BadAction(format!(
-                "expected {} values (2 per env), got {}",
-                2 * n,
+                "expected {} values ({per} per env), got {}",
+                per * n,
                 actions.len()
             )));
         }
@@ -167,7 +169,7 @@ impl VecEnv {
         let results = self
             .envs
             .par_iter_mut()
-            .zip(actions.par_chunks(2))
+            .zip(actions.par_chunks(per))
             .zip(next_seeds)
             .map(|((env, a), next)| -> EnvResult<(Step, bool)> {
                 let mut step = env.step(a)?;
