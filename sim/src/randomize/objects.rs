@@ -1,0 +1,432 @@
+//! Object randomisation: every eligible object of a [`SceneFile`] becomes another shape
+//! variant of its category, uniformly scaled into the bounding box the original took.
+//!
+//! What is kept: names, categories, rooms, supports (`on`), yaw, `fixed`, material overrides
+//! and the number of objects. The new model's box lies inside the original's (one axis
+//! touching it): its bottom stays on the floor or its support, its back stays against the
+//! wall for objects placed against walls (and wall-mounted ones), and it is centred on the
+//! original's footprint otherwise. Initial joint positions are kept for joints the new
+//! variant has (clamped to its limits) and dropped for others.
+//!
+//! Objects resting on a swapped support are moved onto the new support's matching surface
+//! (the shelf at the most similar relative height that is large and tall enough), at the same
+//! relative place on it. When the result would not validate (two small objects squeezed
+//! together on a smaller shelf, say), the support and everything on it go back to the
+//! original, so the returned scene always validates.
+
+use std::collections::HashMap;
+
+use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+use rand::RngExt;
+use rand_pcg::Pcg64Mcg;
+
+use super::config::ObjectRandomization;
+use super::error::RandomizeError;
+use super::sampling::{Stream, stream};
+use crate::assets::{Asset, AssetSpec, Category, Material, Placement};
+use crate::scene::{BoundingBox, SceneError, SceneFile, SceneObject};
+
+/// One object that became another variant.
+///
+/// ```
+/// let s = hearth_sim::randomize::ObjectSwap { name: "chair_0".into(), category: hearth_sim::assets::Category::Chair, from_variant: 0, to_variant: 2, from_scale: 1.0, to_scale: 0.9 };
+/// assert_ne!(s.from_variant, s.to_variant);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectSwap {
+    /// Object name.
+    pub name: String,
+    /// Its category.
+    pub category: Category,
+    /// Variant before.
+    pub from_variant: usize,
+    /// Variant after.
+    pub to_variant: usize,
+    /// Scale before.
+    pub from_scale: f64,
+    /// Scale after.
+    pub to_scale: f64,
+}
+
+/// What [`randomize_objects`] did.
+///
+/// ```
+/// let r = hearth_sim::randomize::ObjectReport::default();
+/// assert!(r.swapped.is_empty() && r.reseated.is_empty() && r.reverted.is_empty());
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjectReport {
+    /// Objects swapped, in scene order.
+    pub swapped: Vec<ObjectSwap>,
+    /// Objects moved onto the surface of their swapped support.
+    pub reseated: Vec<String>,
+    /// Objects put back to the original because their group would not validate.
+    pub reverted: Vec<String>,
+}
+
+type AssetKey = (Category, usize, u64, Option<Material>);
+
+#[derive(Default)]
+struct Cache(HashMap<AssetKey, Asset>);
+
+impl Cache {
+    fn get(&mut self, spec: &AssetSpec) -> Option<&Asset> {
+        let key = (spec.category, spec.variant, spec.scale.to_bits(), spec.material);
+        if !self.0.contains_key(&key) {
+            let asset = Asset::build_spec(spec).ok()?;
+            self.0.insert(key, asset);
+        }
+        self.0.get(&key)
+    }
+}
+
+/// Whether `c` may be swapped under `cfg`.
+fn eligible(c: Category, cfg: &ObjectRandomization) -> bool {
+    c.placement() != Placement::InWall && (cfg.categories.is_empty() || cfg.categories.iter().any(|n| n == c.name()))
+}
+
+/// Picks a new variant for object `o` (of category `c`, built as `old`) and returns its spec
+/// and the offset of its frame in the original object frame.
+fn choose(
+    o: &SceneObject,
+    c: Category,
+    old: &Asset,
+    cfg: &ObjectRandomization,
+    rng: &mut Pcg64Mcg,
+    cache: &mut Cache,
+) -> Option<(AssetSpec, Vector3<f64>)> {
+    let mut candidates: Vec<usize> = (0..c.variants()).filter(|&v| v != o.variant).collect();
+    // Fisher–Yates with the object's own stream.
+    for i in (1..candidates.len()).rev() {
+        let j = rng.random_range(0..=i);
+        candidates.swap(i, j);
+    }
+    let ext_old = old.aabb_max - old.aabb_min;
+    let vol_old = ext_old.x * ext_old.y * ext_old.z;
+    for v in candidates {
+        let unit = cache.get(&AssetSpec {
+            category: c,
+            variant: v,
+            scale: 1.0,
+            material: o.material,
+        })?;
+        let ext1 = unit.aabb_max - unit.aabb_min;
+        let mut k = f64::INFINITY;
+        for a in 0..3 {
+            if ext1[a] > 1e-9 {
+                k = k.min(ext_old[a] / ext1[a]);
+            }
+        }
+        // A hair smaller, so rounding never pushes the new box outside the old one.
+        let k = k * (1.0 - 1e-9);
+        if !(k.is_finite() && k > 0.1 && k <= 10.0) {
+            continue;
+        }
+        let spec = AssetSpec {
+            category: c,
+            variant: v,
+            scale: k,
+            material: o.material,
+        };
+        let Some(new) = cache.get(&spec) else { continue };
+        let ext_new = new.aabb_max - new.aabb_min;
+        if vol_old > 0.0 && ext_new.x * ext_new.y * ext_new.z / vol_old < cfg.min_fill {
+            continue;
+        }
+        let centre = |a: &Asset| (a.aabb_min + a.aabb_max) / 2.0;
+        let back = matches!(c.placement(), Placement::AgainstWall | Placement::WallMounted { .. });
+        let offset = Vector3::new(
+            if back {
+                old.aabb_min.x - new.aabb_min.x
+            } else {
+                centre(old).x - centre(new).x
+            },
+            centre(old).y - centre(new).y,
+            old.aabb_min.z - new.aabb_min.z,
+        );
+        return Some((spec, offset));
+    }
+    None
+}
+
+/// The object with a new spec, its frame moved by `offset` (in its own frame).
+fn swapped_object(o: &SceneObject, spec: &AssetSpec, offset: &Vector3<f64>, new: &Asset) -> SceneObject {
+    let mut n = o.clone();
+    n.variant = spec.variant;
+    n.scale = spec.scale;
+    let p = o.pose() * Point3::from(*offset);
+    n.position = [p.x, p.y, p.z];
+    if n.bbox.is_some() {
+        n.bbox = Some(BoundingBox {
+            min: new.aabb_min.into(),
+            max: new.aabb_max.into(),
+        });
+    }
+    let model = &new.model;
+    n.joints = o
+        .joints
+        .iter()
+        .filter_map(|(j, &x)| {
+            let k = model.variable_names().iter().position(|m| m == j)?;
+            Some((j.clone(), x.clamp(model.lower()[k], model.upper()[k])))
+        })
+        .collect();
+    n
+}
+
+/// Box `[lo, hi]` of an object placed at `pose`, in the frame `frame` (axis-aligned there).
+fn box_in(
+    frame: &Isometry3<f64>,
+    pose: &Isometry3<f64>,
+    lo: &Vector3<f64>,
+    hi: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let to = frame.inverse() * pose;
+    let mut a = Vector3::repeat(f64::INFINITY);
+    let mut b = Vector3::repeat(f64::NEG_INFINITY);
+    for k in 0..8 {
+        let c = Vector3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        );
+        let p = to * Point3::from(c);
+        a = a.inf(&p.coords);
+        b = b.sup(&p.coords);
+    }
+    (a, b)
+}
+
+/// Moves dependent `d` (built as `d_asset`) from the old support (`s_old` at `s_old_pose`) onto
+/// the matching surface of the new one (`s_new` at `s_new_pose`). `None` when it does not fit.
+fn reseat(
+    d: &SceneObject,
+    d_asset: &Asset,
+    s_old_pose: &Isometry3<f64>,
+    s_old: &Asset,
+    s_new_pose: &Isometry3<f64>,
+    s_new: &Asset,
+) -> Option<[f64; 3]> {
+    let pose = d.pose();
+    let (bl, bh) = box_in(s_old_pose, &pose, &d_asset.aabb_min, &d_asset.aabb_max);
+    let c = (bl + bh) / 2.0;
+    let half = (bh - bl) / 2.0;
+    let old_surface = s_old
+        .surfaces
+        .iter()
+        .filter(|s| {
+            (s.z - bl.z).abs() < 0.03
+                && c.x > s.min[0] - 0.02
+                && c.x < s.max[0] + 0.02
+                && c.y > s.min[1] - 0.02
+                && c.y < s.max[1] + 0.02
+        })
+        .min_by(|a, b| (a.z - bl.z).abs().total_cmp(&(b.z - bl.z).abs()))?;
+    let height = |a: &Asset| (a.aabb_max.z - a.aabb_min.z).max(1e-9);
+    let rel_old = old_surface.z / height(s_old);
+    let new_surface = s_new
+        .surfaces
+        .iter()
+        .filter(|s| {
+            2.0 * half.x <= s.max[0] - s.min[0] && 2.0 * half.y <= s.max[1] - s.min[1] && 2.0 * half.z <= s.clearance
+        })
+        .min_by(|a, b| {
+            let ra = (a.z / height(s_new) - rel_old).abs();
+            let rb = (b.z / height(s_new) - rel_old).abs();
+            ra.total_cmp(&rb)
+        })?;
+    let (bl_n, bh_n) = box_in(s_new_pose, &pose, &d_asset.aabb_min, &d_asset.aabb_max);
+    let c_n = (bl_n + bh_n) / 2.0;
+    let mut target = [0.0; 2];
+    for a in 0..2 {
+        let span_old = (old_surface.max[a] - old_surface.min[a]).max(1e-9);
+        let u = ((c[a] - old_surface.min[a]) / span_old).clamp(0.0, 1.0);
+        let t = new_surface.min[a] + u * (new_surface.max[a] - new_surface.min[a]);
+        let (lo, hi) = (new_surface.min[a] + half[a], new_surface.max[a] - half[a]);
+        target[a] = if lo <= hi { t.clamp(lo, hi) } else { (lo + hi) / 2.0 };
+    }
+    let delta = Vector3::new(target[0] - c_n.x, target[1] - c_n.y, new_surface.z - bl_n.z);
+    let moved = Translation3::from(s_new_pose.rotation * delta) * pose;
+    let t = moved.translation.vector;
+    Some([t.x, t.y, t.z])
+}
+
+/// The root of an object's support chain (itself when it rests on nothing).
+fn root_of(i: usize, scene: &SceneFile, index: &HashMap<&str, usize>) -> usize {
+    let mut r = i;
+    for _ in 0..scene.objects.len() {
+        match scene.objects[r].on.as_deref().and_then(|s| index.get(s)) {
+            Some(&s) if s != r => r = s,
+            _ => break,
+        }
+    }
+    r
+}
+
+/// Swaps objects of `scene` for other variants of their categories (see the [module
+/// docs](self)). Draws one seed from `rng`; each object then has its own stream keyed by its
+/// name, so whether an object is swapped, and for what, does not depend on the others.
+///
+/// # Errors
+/// [`RandomizeError::Scene`] when the input scene does not validate (the scene is unchanged).
+///
+/// ```
+/// use hearth_sim::randomize::{ObjectRandomization, randomize_objects};
+/// use hearth_sim::scene::{SceneFile, SceneObject};
+/// use rand::SeedableRng;
+/// let mut scene = SceneFile::empty("dining");
+/// scene.objects.push(SceneObject::new("table", "table", 0, [0.0, 0.0, 0.0]));
+/// let cfg = ObjectRandomization { enabled: true, ..Default::default() };
+/// let report = randomize_objects(&mut scene, &cfg, &mut rand_pcg::Pcg64Mcg::seed_from_u64(1)).unwrap();
+/// assert_eq!(report.swapped.len(), 1);
+/// assert_ne!(scene.objects[0].variant, 0);
+/// assert!(scene.validate().is_ok());
+/// ```
+pub fn randomize_objects(
+    scene: &mut SceneFile,
+    cfg: &ObjectRandomization,
+    rng: &mut Pcg64Mcg,
+) -> Result<ObjectReport, RandomizeError> {
+    let base: u64 = rng.random();
+    let assets = scene.assets()?;
+    let mut report = ObjectReport::default();
+    if !cfg.enabled {
+        return Ok(report);
+    }
+    let original = scene.objects.clone();
+    let n = original.len();
+    let index: HashMap<&str, usize> = original.iter().enumerate().map(|(i, o)| (o.name.as_str(), i)).collect();
+    let mut cache = Cache::default();
+
+    // 1. Each object's own swap.
+    let mut new_assets: Vec<Asset> = assets.clone();
+    let mut objects = original.clone();
+    let mut swapped = vec![false; n];
+    for (i, o) in original.iter().enumerate() {
+        let Some(c) = Category::from_name(&o.category) else {
+            continue;
+        };
+        if !eligible(c, cfg) {
+            continue;
+        }
+        let mut r = stream(base, 0, Stream::Objects, &o.name);
+        if r.random::<f64>() >= cfg.probability {
+            continue;
+        }
+        let Some((spec, offset)) = choose(o, c, &assets[i], cfg, &mut r, &mut cache) else {
+            continue;
+        };
+        let Some(new) = cache.get(&spec) else { continue };
+        objects[i] = swapped_object(o, &spec, &offset, new);
+        new_assets[i] = new.clone();
+        swapped[i] = true;
+    }
+
+    // 2. Dependents of swapped supports move onto the new surfaces (supports first).
+    let depth = |i: usize| {
+        let mut d = 0;
+        let mut r = i;
+        while let Some(&s) = original[r].on.as_deref().and_then(|s| index.get(s)) {
+            if s == r || d > n {
+                break;
+            }
+            d += 1;
+            r = s;
+        }
+        d
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| depth(i));
+    let roots: Vec<usize> = (0..n).map(|i| root_of(i, scene, &index)).collect();
+    let mut failed_roots: Vec<usize> = Vec::new();
+    let mut reseated = vec![false; n];
+    for &i in &order {
+        let Some(&s) = original[i].on.as_deref().and_then(|s| index.get(s)) else {
+            continue;
+        };
+        if objects[s] == original[s] {
+            continue;
+        }
+        let (s_old_pose, s_new_pose) = (original[s].pose(), objects[s].pose());
+        match reseat(
+            &objects[i],
+            &new_assets[i],
+            &s_old_pose,
+            &assets[s],
+            &s_new_pose,
+            &new_assets[s],
+        ) {
+            Some(p) => {
+                objects[i].position = p;
+                reseated[i] = true;
+            }
+            None => failed_roots.push(roots[i]),
+        }
+    }
+
+    // 3. Revert groups until the scene validates.
+    let revert = |objects: &mut Vec<SceneObject>, root: usize, reverted: &mut Vec<bool>| {
+        for k in 0..n {
+            if roots[k] == root {
+                objects[k] = original[k].clone();
+                reverted[k] = true;
+            }
+        }
+    };
+    let mut reverted = vec![false; n];
+    for r in failed_roots {
+        revert(&mut objects, r, &mut reverted);
+    }
+    let mut candidate = scene.clone();
+    for _ in 0..=n {
+        candidate.objects = objects.clone();
+        let names: Vec<String> = match candidate.validate() {
+            Ok(()) => break,
+            Err(SceneError::Overlap { a, b, .. }) => vec![a, b],
+            Err(SceneError::WallOverlap { object, .. }) => vec![object],
+            Err(e) => return Err(e.into()),
+        };
+        let mut any = false;
+        for name in &names {
+            if let Some(&k) = index.get(name.as_str())
+                && group_changed(&objects, &original, &roots, roots[k])
+            {
+                revert(&mut objects, roots[k], &mut reverted);
+                any = true;
+            }
+        }
+        if !any {
+            // Only changed objects can have made the scene invalid; stop looking.
+            break;
+        }
+    }
+    candidate.objects = objects;
+    candidate.validate()?;
+
+    for i in 0..n {
+        if reverted[i] {
+            report.reverted.push(original[i].name.clone());
+            continue;
+        }
+        if swapped[i] {
+            report.swapped.push(ObjectSwap {
+                name: original[i].name.clone(),
+                category: assets[i].category,
+                from_variant: original[i].variant,
+                to_variant: candidate.objects[i].variant,
+                from_scale: original[i].scale,
+                to_scale: candidate.objects[i].scale,
+            });
+        }
+        if reseated[i] {
+            report.reseated.push(original[i].name.clone());
+        }
+    }
+    *scene = candidate;
+    Ok(report)
+}
+
+/// Whether any member of group `root` differs from the original.
+fn group_changed(objects: &[SceneObject], original: &[SceneObject], roots: &[usize], root: usize) -> bool {
+    (0..objects.len()).any(|k| roots[k] == root && objects[k] != original[k])
+}
