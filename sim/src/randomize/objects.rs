@@ -338,8 +338,10 @@ pub fn randomize_objects(
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by_key(|&i| depth(i));
     let roots: Vec<usize> = (0..n).map(|i| root_of(i, scene, &index)).collect();
-    let mut failed_roots: Vec<usize> = Vec::new();
-    let mut reseated = vec![false; n];
+    let own = objects.clone();
+    // Group levels, indexed by root: 0 = swapped supports with their load moved onto them,
+    // 1 = supports as they were with their load swapped in place, 2 = all as they were.
+    let mut level = vec![0u8; n];
     for &i in &order {
         let Some(&s) = original[i].on.as_deref().and_then(|s| index.get(s)) else {
             continue;
@@ -356,42 +358,45 @@ pub fn randomize_objects(
             &s_new_pose,
             &new_assets[s],
         ) {
-            Some(p) => {
-                objects[i].position = p;
-                reseated[i] = true;
-            }
-            None => failed_roots.push(roots[i]),
+            Some(p) => objects[i].position = p,
+            None => level[roots[i]] = 1,
         }
     }
-
-    // 3. Revert groups until the scene validates.
-    let revert = |objects: &mut Vec<SceneObject>, root: usize, reverted: &mut Vec<bool>| {
-        for k in 0..n {
-            if roots[k] == root {
-                objects[k] = original[k].clone();
-                reverted[k] = true;
-            }
-        }
+    let full = objects;
+    let is_support: Vec<bool> = original
+        .iter()
+        .map(|o| original.iter().any(|d| d.on.as_deref() == Some(o.name.as_str())))
+        .collect();
+    let compose = |level: &[u8]| -> Vec<SceneObject> {
+        (0..n)
+            .map(|k| match level[roots[k]] {
+                0 => full[k].clone(),
+                1 if !is_support[k] => own[k].clone(),
+                _ => original[k].clone(),
+            })
+            .collect()
     };
-    let mut reverted = vec![false; n];
-    for r in failed_roots {
-        revert(&mut objects, r, &mut reverted);
-    }
+
+    // 3. Step groups back until the scene validates.
     let mut candidate = scene.clone();
-    for _ in 0..=n {
-        candidate.objects = objects.clone();
+    for _ in 0..=2 * n {
+        candidate.objects = compose(&level);
         let names: Vec<String> = match candidate.validate() {
             Ok(()) => break,
             Err(SceneError::Overlap { a, b, .. }) => vec![a, b],
             Err(SceneError::WallOverlap { object, .. }) => vec![object],
             Err(e) => return Err(e.into()),
         };
+        let mut groups: Vec<usize> = names
+            .iter()
+            .filter_map(|m| index.get(m.as_str()))
+            .map(|&k| roots[k])
+            .collect();
+        groups.dedup();
         let mut any = false;
-        for name in &names {
-            if let Some(&k) = index.get(name.as_str())
-                && group_changed(&objects, &original, &roots, roots[k])
-            {
-                revert(&mut objects, roots[k], &mut reverted);
+        for r in groups {
+            if level[r] < 2 {
+                level[r] += 1;
                 any = true;
             }
         }
@@ -400,8 +405,14 @@ pub fn randomize_objects(
             break;
         }
     }
-    candidate.objects = objects;
+    candidate.objects = compose(&level);
     candidate.validate()?;
+    let reverted: Vec<bool> = (0..n)
+        .map(|k| swapped[k] && candidate.objects[k] == original[k])
+        .collect();
+    let reseated: Vec<bool> = (0..n)
+        .map(|k| candidate.objects[k].position != own[k].position && candidate.objects[k] != original[k])
+        .collect();
 
     for i in 0..n {
         if reverted[i] {
@@ -424,9 +435,4 @@ pub fn randomize_objects(
     }
     *scene = candidate;
     Ok(report)
-}
-
-/// Whether any member of group `root` differs from the original.
-fn group_changed(objects: &[SceneObject], original: &[SceneObject], roots: &[usize], root: usize) -> bool {
-    (0..objects.len()).any(|k| roots[k] == root && objects[k] != original[k])
 }

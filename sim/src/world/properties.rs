@@ -108,7 +108,15 @@ impl World {
     /// # Ok::<(), hearth_sim::world::WorldError>(())
     /// ```
     pub fn body_mass(&self, body: BodyId) -> WorldResult<f64> {
-        Ok(f64::from(self.rigid_body(body)?.mass_properties().local_mprops.mass()))
+        Ok(f64::from(self.total_mass_properties(body)?.mass()))
+    }
+
+    /// The body's mass properties from its colliders and additional mass properties as they
+    /// are now (rapier refreshes its own copy only at the next step).
+    fn total_mass_properties(&self, body: BodyId) -> WorldResult<MassProperties> {
+        let mut rb = self.rigid_body(body)?.clone();
+        rb.recompute_mass_properties_from_colliders(&self.state.colliders);
+        Ok(rb.mass_properties().local_mprops)
     }
 
     /// Sets the mass of a body, scaling its inertia tensor by the same factor and keeping its
@@ -120,7 +128,7 @@ impl World {
     /// `[1e-6, 1e6]` kg; [`WorldError::InvalidModel`] for a body that has no mass to scale.
     pub fn set_body_mass(&mut self, body: BodyId, mass: f64) -> WorldResult<()> {
         check_range("mass", "body", mass, 1e-6, 1e6)?;
-        let current = self.rigid_body(body)?.mass_properties().local_mprops;
+        let current = self.total_mass_properties(body)?;
         if current.mass() <= 0.0 {
             return Err(WorldError::InvalidModel {
                 model: self.body_name(body).unwrap_or("body").to_owned(),
@@ -216,8 +224,8 @@ impl World {
             }
         };
         let s = &self.state;
-        for (_, rb) in s.bodies.iter() {
-            feed(rb.mass_properties().local_mprops.mass());
+        for (handle, rb) in s.bodies.iter() {
+            feed(self.total_mass_properties(BodyId(handle)).map_or(0.0, |m| m.mass()));
             for &c in rb.colliders() {
                 if let Some(co) = s.colliders.get(c) {
                     feed(co.friction());
