@@ -125,22 +125,44 @@ impl Randomizer {
     ///
     /// # Errors
     /// [`RandomizeError::InvalidValue`] naming the first bad key.
+    ///
+    /// ```
+    /// use hearth_sim::randomize::{RandomizationConfig, Randomizer};
+    /// let mut config = RandomizationConfig::default();
+    /// config.objects.probability = 2.0;
+    /// assert!(Randomizer::new(config, 1).is_err());
+    /// ```
     pub fn new(config: RandomizationConfig, seed: u64) -> Result<Self, RandomizeError> {
         config.validate()?;
         Ok(Randomizer { config, seed })
     }
 
     /// The configuration.
+    ///
+    /// ```
+    /// let r = hearth_sim::randomize::Randomizer::new(Default::default(), 1).unwrap();
+    /// assert_eq!(r.config().every_k_episodes, 1);
+    /// ```
     pub fn config(&self) -> &RandomizationConfig {
         &self.config
     }
 
     /// The draw episode `episode` uses for objects and materials: `episode / every_k_episodes`.
+    ///
+    /// ```
+    /// let r = hearth_sim::randomize::Randomizer::new(Default::default(), 1).unwrap();
+    /// assert_eq!(r.epoch(5), 5);
+    /// ```
     pub fn epoch(&self, episode: u64) -> u64 {
         episode / self.config.every_k_episodes
     }
 
     /// Whether episode `episode` starts a new draw of objects and materials.
+    ///
+    /// ```
+    /// let r = hearth_sim::randomize::Randomizer::new(Default::default(), 1).unwrap();
+    /// assert!(r.redraws_at(5));
+    /// ```
     pub fn redraws_at(&self, episode: u64) -> bool {
         episode.is_multiple_of(self.config.every_k_episodes)
     }
@@ -180,6 +202,16 @@ impl Randomizer {
     ///
     /// # Errors
     /// [`RandomizeError::Scene`] when `scene` itself does not validate (it is unchanged then).
+    ///
+    /// ```
+    /// use hearth_sim::randomize::{RandomizationConfig, Randomizer};
+    /// use hearth_sim::scene::{RobotPlacement, SceneFile};
+    /// let config = RandomizationConfig::from_toml_str("[pose]\nrobot_xy_std = 0.1").unwrap();
+    /// let r = Randomizer::new(config, 1).unwrap();
+    /// let mut scene = SceneFile::empty("open");
+    /// scene.robot = Some(RobotPlacement { name: "fetch".into(), position: [0.0; 3], yaw: 0.0 });
+    /// assert!(r.apply_scene(0, &mut scene).unwrap().robot_moved);
+    /// ```
     pub fn apply_scene(&self, episode: u64, scene: &mut SceneFile) -> Result<SceneReport, RandomizeError> {
         let mut report = SceneReport::default();
         if self.config.objects.enabled {
@@ -202,6 +234,21 @@ impl Randomizer {
     ///
     /// # Errors
     /// [`RandomizeError::World`] when `loaded` does not belong to `world`.
+    ///
+    /// ```
+    /// use hearth_sim::randomize::{RandomizationConfig, Randomizer};
+    /// use hearth_sim::scene::{SceneFile, SceneObject};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// let config = RandomizationConfig::from_toml_str("[physics]\nenabled = true\nfriction = true").unwrap();
+    /// let r = Randomizer::new(config, 1).unwrap();
+    /// let mut scene = SceneFile::empty("one chair");
+    /// scene.objects.push(SceneObject::new("chair", "chair", 0, [0.0; 3]));
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let loaded = world.load_scene(&scene).unwrap();
+    /// let before = world.properties_hash();
+    /// assert!(r.apply_world(0, &mut world, &loaded).unwrap().bodies > 0);
+    /// assert_ne!(world.properties_hash(), before);
+    /// ```
     pub fn apply_world(
         &self,
         episode: u64,
@@ -219,7 +266,14 @@ impl Randomizer {
         )
     }
 
-    /// The visual draw of `episode`.
+    /// The visual draw of `episode` (the same for every episode of one draw epoch).
+    ///
+    /// ```
+    /// let config = hearth_sim::randomize::RandomizationConfig { every_k_episodes: 2, ..Default::default() };
+    /// let r = hearth_sim::randomize::Randomizer::new(config, 1).unwrap();
+    /// assert_eq!(r.visuals(0), r.visuals(1));
+    /// assert_ne!(r.visuals(1), r.visuals(2));
+    /// ```
     pub fn visuals(&self, episode: u64) -> VisualRandomization {
         use rand::RngExt;
         VisualRandomization::new(self.rng(episode, Stream::Visual).random(), self.config.visual.clone())
@@ -231,11 +285,34 @@ impl Randomizer {
     ///
     /// # Errors
     /// [`RandomizeError::Sensor`].
+    ///
+    /// ```
+    /// use hearth_sim::randomize::{RandomizationConfig, Randomizer};
+    /// use hearth_sim::scene::{SceneFile, SceneObject};
+    /// use hearth_sim::sensors::{Backend, Camera, CameraConfig, Mount, Preset};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Point3;
+    /// let mut scene = SceneFile::empty("one table");
+    /// scene.objects.push(SceneObject::new("table", "table", 0, [0.0; 3]));
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.load_scene(&scene).unwrap();
+    /// let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// config.backend = Backend::Raycast;
+    /// config.mount = Some(Mount::look_at(Point3::new(2.0, 0.0, 1.0), Point3::origin()).unwrap());
+    /// let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let r = Randomizer::new(RandomizationConfig::from_toml_str("[visual]\nenabled = true").unwrap(), 1).unwrap();
+    /// assert!(r.apply_camera(0, &world, &mut camera).unwrap() > 0);
+    /// ```
     pub fn apply_camera(&self, episode: u64, world: &World, camera: &mut Camera) -> Result<usize, RandomizeError> {
         self.visuals(episode).apply_to_camera(world, camera)
     }
 
     /// The camera mount offset of `episode` (identity when off); see [`camera_offset`].
+    ///
+    /// ```
+    /// let r = hearth_sim::randomize::Randomizer::new(Default::default(), 1).unwrap();
+    /// assert_eq!(r.camera_offset(0), nalgebra::Isometry3::identity());
+    /// ```
     pub fn camera_offset(&self, episode: u64) -> Isometry3<f64> {
         camera_offset(&self.config.pose, &mut self.rng(episode, Stream::CameraPose))
     }

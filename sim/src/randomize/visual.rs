@@ -151,6 +151,11 @@ pub struct VisualRandomization {
 
 impl VisualRandomization {
     /// A draw with its own seed.
+    ///
+    /// ```
+    /// use hearth_sim::randomize::VisualRandomization;
+    /// assert_ne!(VisualRandomization::new(1, Default::default()), VisualRandomization::new(2, Default::default()));
+    /// ```
     pub fn new(seed: u64, config: VisualRandomizationConfig) -> Self {
         VisualRandomization { seed, config }
     }
@@ -191,6 +196,12 @@ impl VisualRandomization {
     }
 
     /// Replaces the materials of `scene`'s items in place; returns how many changed.
+    ///
+    /// ```
+    /// use hearth_sim::randomize::VisualRandomization;
+    /// let mut empty = hearth_sim::sensors::VisualScene::default();
+    /// assert_eq!(VisualRandomization::new(1, Default::default()).apply_to_scene(&mut empty), 0);
+    /// ```
     pub fn apply_to_scene(&self, scene: &mut VisualScene) -> usize {
         let mut changed = 0;
         for item in &mut scene.items {
@@ -215,6 +226,21 @@ impl VisualRandomization {
     ///
     /// # Errors
     /// [`RandomizeError::Sensor`] when the camera refuses a material or cannot be rebuilt.
+    ///
+    /// ```
+    /// use hearth_sim::randomize::{VisualRandomization, VisualRandomizationConfig};
+    /// use hearth_sim::sensors::{Backend, Camera, CameraConfig, Mount, Preset};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::{Isometry3, Point3};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.3; 3], &Isometry3::translation(2.0, 0.0, 0.3), true).unwrap();
+    /// let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// config.backend = Backend::Raycast;
+    /// config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(2.0, 0.0, 0.3)).unwrap());
+    /// let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let v = VisualRandomization::new(1, VisualRandomizationConfig { enabled: true, building: true, ..Default::default() });
+    /// assert!(v.apply_to_camera(&world, &mut camera).unwrap() > 0); // the crate and the ground
+    /// ```
     pub fn apply_to_camera(&self, world: &World, camera: &mut Camera) -> Result<usize, RandomizeError> {
         let mut pristine = VisualScene::from_world(world);
         if pristine.items.len() != camera.scene().items.len() {

@@ -53,6 +53,13 @@ impl World {
     /// # Errors
     /// [`WorldError::UnknownBody`]; [`WorldError::OutOfRange`] for a value outside `[0, 10]`
     /// (the world is unchanged then).
+    ///
+    /// ```
+    /// let mut world = hearth_sim::world::World::new(Default::default()).unwrap();
+    /// let ground = world.ground().unwrap();
+    /// world.set_body_friction(ground, 0.3).unwrap();
+    /// assert!((world.body_friction(ground).unwrap().unwrap() - 0.3).abs() < 1e-6);
+    /// ```
     pub fn set_body_friction(&mut self, body: BodyId, friction: f64) -> WorldResult<()> {
         check_range("friction", "body", friction, 0.0, MAX_FRICTION)?;
         self.for_colliders(body, |c| c.set_friction(friction as Real))
@@ -87,6 +94,13 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownBody`]; [`WorldError::OutOfRange`] outside `[0, 1]`.
+    ///
+    /// ```
+    /// let mut world = hearth_sim::world::World::new(Default::default()).unwrap();
+    /// let ground = world.ground().unwrap();
+    /// world.set_body_restitution(ground, 0.5).unwrap();
+    /// assert!(world.set_body_restitution(ground, f64::NAN).is_err());
+    /// ```
     pub fn set_body_restitution(&mut self, body: BodyId, restitution: f64) -> WorldResult<()> {
         check_range("restitution", "body", restitution, 0.0, MAX_RESTITUTION)?;
         self.for_colliders(body, |c| c.set_restitution(restitution as Real))
@@ -126,6 +140,16 @@ impl World {
     /// # Errors
     /// [`WorldError::UnknownBody`]; [`WorldError::OutOfRange`] for a mass outside
     /// `[1e-6, 1e6]` kg; [`WorldError::InvalidModel`] for a body that has no mass to scale.
+    ///
+    /// ```
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let b = world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// world.set_body_mass(b, 5.0).unwrap();
+    /// assert!((world.body_mass(b).unwrap() - 5.0).abs() < 1e-5);
+    /// assert!(world.set_body_mass(b, 0.0).is_err());
+    /// ```
     pub fn set_body_mass(&mut self, body: BodyId, mass: f64) -> WorldResult<()> {
         check_range("mass", "body", mass, 1e-6, 1e6)?;
         let current = self.total_mass_properties(body)?;
@@ -183,6 +207,16 @@ impl World {
     ///
     /// # Errors
     /// Unknown model or joint, a fixed joint, or a value outside `[0, 1e6]`.
+    ///
+    /// ```
+    /// use hearth_sim::assets::{Asset, Category};
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let fridge = Asset::build(Category::Fridge, 0, 1.0).unwrap();
+    /// let h = world.spawn_model(&fridge.model, &nalgebra::Isometry3::identity(), SpawnOptions::fixed()).unwrap();
+    /// world.set_joint_damping(h, "door_0_hinge", 0.5).unwrap();
+    /// assert!(world.set_joint_damping(h, "door_0_hinge", -1.0).is_err());
+    /// ```
     pub fn set_joint_damping(&mut self, model: ModelHandle, joint: &str, damping: f64) -> WorldResult<()> {
         check_range("joint damping", joint, damping, 0.0, MAX_DAMPING)?;
         let dof = self.joint_dof(model, joint)?;
