@@ -206,6 +206,17 @@ fn object_swaps_are_reproducible_per_seed() {
     let r = randomize_objects(&mut chairs, &only, &mut rng(1)).unwrap();
     assert!(!r.swapped.is_empty());
     assert!(r.swapped.iter().all(|s| s.category == Category::Chair));
+
+    // An invalid scene is refused and left as it was.
+    let mut bad = base.clone();
+    bad.objects[0].category = "spaceship".into();
+    let copy = bad.clone();
+    let err = randomize_objects(&mut bad, &only, &mut rng(1)).unwrap_err();
+    assert!(
+        matches!(err, RandomizeError::Scene(_)) && err.to_string().contains("spaceship"),
+        "{err}"
+    );
+    assert_eq!(bad, copy);
 }
 
 fn loaded(scene: &SceneFile) -> (World, LoadedScene) {
