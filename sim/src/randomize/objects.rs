@@ -24,7 +24,7 @@ use super::config::ObjectRandomization;
 use super::error::RandomizeError;
 use super::sampling::{Stream, stream};
 use crate::assets::{Asset, AssetSpec, Category, Material, Placement};
-use crate::scene::{BoundingBox, SceneError, SceneFile, SceneObject};
+use crate::scene::{BoundingBox, OVERLAP_TOLERANCE, SceneError, SceneFile, SceneObject};
 
 /// One object that became another variant.
 ///
@@ -85,16 +85,17 @@ fn eligible(c: Category, cfg: &ObjectRandomization) -> bool {
     c.placement() != Placement::InWall && (cfg.categories.is_empty() || cfg.categories.iter().any(|n| n == c.name()))
 }
 
-/// Picks a new variant for object `o` (of category `c`, built as `old`) and returns its spec
-/// and the offset of its frame in the original object frame.
-fn choose(
+/// The variants object `o` (of category `c`, built as `old`) may become, in a random order:
+/// each spec with the offset of its frame in the original object frame.
+fn candidates(
     o: &SceneObject,
     c: Category,
     old: &Asset,
     cfg: &ObjectRandomization,
     rng: &mut Pcg64Mcg,
     cache: &mut Cache,
-) -> Option<(AssetSpec, Vector3<f64>)> {
+) -> Vec<(AssetSpec, Vector3<f64>)> {
+    let mut out = Vec::new();
     let mut candidates: Vec<usize> = (0..c.variants()).filter(|&v| v != o.variant).collect();
     // Fisher–Yates with the object's own stream.
     for i in (1..candidates.len()).rev() {
@@ -104,12 +105,14 @@ fn choose(
     let ext_old = old.aabb_max - old.aabb_min;
     let vol_old = ext_old.x * ext_old.y * ext_old.z;
     for v in candidates {
-        let unit = cache.get(&AssetSpec {
+        let Some(unit) = cache.get(&AssetSpec {
             category: c,
             variant: v,
             scale: 1.0,
             material: o.material,
-        })?;
+        }) else {
+            continue;
+        };
         let ext1 = unit.aabb_max - unit.aabb_min;
         let mut k = f64::INFINITY;
         for a in 0..3 {
@@ -144,9 +147,9 @@ fn choose(
             centre(old).y - centre(new).y,
             old.aabb_min.z - new.aabb_min.z,
         );
-        return Some((spec, offset));
+        out.push((spec, offset));
     }
-    None
+    out
 }
 
 /// The object with a new spec, its frame moved by `offset` (in its own frame).
@@ -197,58 +200,174 @@ fn box_in(
     (a, b)
 }
 
-/// Moves dependent `d` (built as `d_asset`) from the old support (`s_old` at `s_old_pose`) onto
-/// the matching surface of the new one (`s_new` at `s_new_pose`). `None` when it does not fit.
-fn reseat(
+/// Where a dependent sits on its old support and which surface of the new support takes it.
+struct Located {
+    /// Index of the new support's surface.
+    surface: usize,
+    /// Index of the old support's surface.
+    old_surface: usize,
+    /// Box centre in the old support frame.
+    c_old: Vector3<f64>,
+    /// Half extents of the box in the support frame.
+    half: Vector3<f64>,
+    /// Box corners in the new support frame before moving.
+    bl_n: Vector3<f64>,
+    bh_n: Vector3<f64>,
+}
+
+/// How dependents are laid out on the new surfaces.
+#[derive(Clone, Copy)]
+enum Layout {
+    /// At the same relative place on the surface.
+    Relative,
+    /// At the same distance from the surface's corner.
+    Offset,
+    /// Packed in rows from the surface's corner, in their old order.
+    Packed,
+}
+
+/// Gap between objects packed onto a surface, metres.
+const PACK_GAP: f64 = 0.02;
+
+/// Finds where dependent `d` (built as `d_asset`) rests on the old support (`s_old` at
+/// `s_old_pose`) and the surface of the new one (`s_new` at `s_new_pose`) that takes it: the
+/// one at the most similar relative height that is large and tall enough. `None` when none is.
+fn locate(
     d: &SceneObject,
     d_asset: &Asset,
     s_old_pose: &Isometry3<f64>,
     s_old: &Asset,
     s_new_pose: &Isometry3<f64>,
     s_new: &Asset,
-) -> Option<[f64; 3]> {
+) -> Option<Located> {
     let pose = d.pose();
     let (bl, bh) = box_in(s_old_pose, &pose, &d_asset.aabb_min, &d_asset.aabb_max);
     let c = (bl + bh) / 2.0;
     let half = (bh - bl) / 2.0;
-    let old_surface = s_old
+    let (old_surface, old) = s_old
         .surfaces
         .iter()
-        .filter(|s| {
+        .enumerate()
+        .filter(|(_, s)| {
             (s.z - bl.z).abs() < 0.03
                 && c.x > s.min[0] - 0.02
                 && c.x < s.max[0] + 0.02
                 && c.y > s.min[1] - 0.02
                 && c.y < s.max[1] + 0.02
         })
-        .min_by(|a, b| (a.z - bl.z).abs().total_cmp(&(b.z - bl.z).abs()))?;
+        .min_by(|(_, a), (_, b)| (a.z - bl.z).abs().total_cmp(&(b.z - bl.z).abs()))?;
     let height = |a: &Asset| (a.aabb_max.z - a.aabb_min.z).max(1e-9);
-    let rel_old = old_surface.z / height(s_old);
-    let new_surface = s_new
+    let rel_old = old.z / height(s_old);
+    let (surface, _) = s_new
         .surfaces
         .iter()
-        .filter(|s| {
+        .enumerate()
+        .filter(|(_, s)| {
             2.0 * half.x <= s.max[0] - s.min[0] && 2.0 * half.y <= s.max[1] - s.min[1] && 2.0 * half.z <= s.clearance
         })
-        .min_by(|a, b| {
+        .min_by(|(_, a), (_, b)| {
             let ra = (a.z / height(s_new) - rel_old).abs();
             let rb = (b.z / height(s_new) - rel_old).abs();
             ra.total_cmp(&rb)
         })?;
     let (bl_n, bh_n) = box_in(s_new_pose, &pose, &d_asset.aabb_min, &d_asset.aabb_max);
-    let c_n = (bl_n + bh_n) / 2.0;
-    let mut target = [0.0; 2];
-    for a in 0..2 {
-        let span_old = (old_surface.max[a] - old_surface.min[a]).max(1e-9);
-        let u = ((c[a] - old_surface.min[a]) / span_old).clamp(0.0, 1.0);
-        let t = new_surface.min[a] + u * (new_surface.max[a] - new_surface.min[a]);
-        let (lo, hi) = (new_surface.min[a] + half[a], new_surface.max[a] - half[a]);
-        target[a] = if lo <= hi { t.clamp(lo, hi) } else { (lo + hi) / 2.0 };
+    Some(Located {
+        surface,
+        old_surface,
+        c_old: c,
+        half,
+        bl_n,
+        bh_n,
+    })
+}
+
+/// Box centres (new support frame, x and y) for every located dependent under `layout`;
+/// `None` when packing runs out of room.
+fn lay_out(located: &[Located], s_old: &Asset, s_new: &Asset, layout: Layout) -> Option<Vec<[f64; 2]>> {
+    let mut targets = vec![[0.0; 2]; located.len()];
+    match layout {
+        Layout::Relative | Layout::Offset => {
+            for (l, t) in located.iter().zip(&mut targets) {
+                let (old, new) = (&s_old.surfaces[l.old_surface], &s_new.surfaces[l.surface]);
+                for a in 0..2 {
+                    let x = match layout {
+                        Layout::Offset => new.min[a] + (l.c_old[a] - old.min[a]),
+                        _ => {
+                            let u = ((l.c_old[a] - old.min[a]) / (old.max[a] - old.min[a]).max(1e-9)).clamp(0.0, 1.0);
+                            new.min[a] + u * (new.max[a] - new.min[a])
+                        }
+                    };
+                    let (lo, hi) = (new.min[a] + l.half[a], new.max[a] - l.half[a]);
+                    t[a] = if lo <= hi { x.clamp(lo, hi) } else { (lo + hi) / 2.0 };
+                }
+            }
+        }
+        Layout::Packed => {
+            for (k, surf) in s_new.surfaces.iter().enumerate() {
+                let mut items: Vec<usize> = (0..located.len()).filter(|&i| located[i].surface == k).collect();
+                items.sort_by(|&a, &b| {
+                    let (la, lb) = (&located[a], &located[b]);
+                    let za = s_old.surfaces[la.old_surface].z;
+                    let zb = s_old.surfaces[lb.old_surface].z;
+                    za.total_cmp(&zb)
+                        .then(la.c_old.x.total_cmp(&lb.c_old.x))
+                        .then(la.c_old.y.total_cmp(&lb.c_old.y))
+                });
+                let (mut x, mut y, mut depth) = (surf.min[0], surf.min[1], 0.0_f64);
+                for i in items {
+                    let (dx, dy) = (2.0 * located[i].half.x, 2.0 * located[i].half.y);
+                    if y + dy > surf.max[1] + 1e-9 {
+                        x += depth + PACK_GAP;
+                        y = surf.min[1];
+                        depth = 0.0;
+                    }
+                    if x + dx > surf.max[0] + 1e-9 || y + dy > surf.max[1] + 1e-9 {
+                        return None;
+                    }
+                    targets[i] = [x + dx / 2.0, y + dy / 2.0];
+                    y += dy + PACK_GAP;
+                    depth = depth.max(dx);
+                }
+            }
+        }
     }
-    let delta = Vector3::new(target[0] - c_n.x, target[1] - c_n.y, new_surface.z - bl_n.z);
-    let moved = Translation3::from(s_new_pose.rotation * delta) * pose;
+    Some(targets)
+}
+
+/// Moves a located dependent to box centre `target` on its new surface: its position, and its
+/// box in the new support frame.
+fn put(
+    d: &SceneObject,
+    l: &Located,
+    target: [f64; 2],
+    s_new_pose: &Isometry3<f64>,
+    s_new: &Asset,
+) -> ([f64; 3], Vector3<f64>, Vector3<f64>) {
+    let c_n = (l.bl_n + l.bh_n) / 2.0;
+    let delta = Vector3::new(
+        target[0] - c_n.x,
+        target[1] - c_n.y,
+        s_new.surfaces[l.surface].z - l.bl_n.z,
+    );
+    let moved = Translation3::from(s_new_pose.rotation * delta) * d.pose();
     let t = moved.translation.vector;
-    Some([t.x, t.y, t.z])
+    ([t.x, t.y, t.z], l.bl_n + delta, l.bh_n + delta)
+}
+
+/// Whether two of the moved objects' boxes (support frame) interpenetrate by more than the
+/// scene format's tolerance.
+fn crowded(moves: &[(usize, ([f64; 3], Vector3<f64>, Vector3<f64>))]) -> bool {
+    for (i, (_, (_, lo_a, hi_a))) in moves.iter().enumerate() {
+        for (_, (_, lo_b, hi_b)) in &moves[i + 1..] {
+            let depth = (0..3)
+                .map(|k| hi_a[k].min(hi_b[k]) - lo_a[k].max(lo_b[k]))
+                .fold(f64::INFINITY, f64::min);
+            if depth > OVERLAP_TOLERANCE {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// The root of an object's support chain (itself when it rests on nothing).
@@ -302,6 +421,7 @@ pub fn randomize_objects(
     let mut new_assets: Vec<Asset> = assets.clone();
     let mut objects = original.clone();
     let mut swapped = vec![false; n];
+    let mut options: Vec<Vec<(AssetSpec, Vector3<f64>)>> = vec![Vec::new(); n];
     for (i, o) in original.iter().enumerate() {
         let Some(c) = Category::from_name(&o.category) else {
             continue;
@@ -313,11 +433,12 @@ pub fn randomize_objects(
         if r.random::<f64>() >= cfg.probability {
             continue;
         }
-        let Some((spec, offset)) = choose(o, c, &assets[i], cfg, &mut r, &mut cache) else {
+        options[i] = candidates(o, c, &assets[i], cfg, &mut r, &mut cache);
+        let Some((spec, offset)) = options[i].first() else {
             continue;
         };
-        let Some(new) = cache.get(&spec) else { continue };
-        objects[i] = swapped_object(o, &spec, &offset, new);
+        let Some(new) = cache.get(spec) else { continue };
+        objects[i] = swapped_object(o, spec, offset, new);
         new_assets[i] = new.clone();
         swapped[i] = true;
     }
@@ -342,24 +463,54 @@ pub fn randomize_objects(
     // Group levels, indexed by root: 0 = swapped supports with their load moved onto them,
     // 1 = supports as they were with their load swapped in place, 2 = all as they were.
     let mut level = vec![0u8; n];
-    for &i in &order {
-        let Some(&s) = original[i].on.as_deref().and_then(|s| index.get(s)) else {
-            continue;
-        };
-        if objects[s] == original[s] {
+    let dependents: Vec<Vec<usize>> = (0..n)
+        .map(|s| {
+            (0..n)
+                .filter(|&d| original[d].on.as_deref() == Some(original[s].name.as_str()) && d != s)
+                .collect()
+        })
+        .collect();
+    for &s in &order {
+        if !swapped[s] || dependents[s].is_empty() {
             continue;
         }
-        let (s_old_pose, s_new_pose) = (original[s].pose(), objects[s].pose());
-        match reseat(
-            &objects[i],
-            &new_assets[i],
-            &s_old_pose,
-            &assets[s],
-            &s_new_pose,
-            &new_assets[s],
-        ) {
-            Some(p) => objects[i].position = p,
-            None => level[roots[i]] = 1,
+        // The first variant (in the object's own random order) whose surfaces take the whole
+        // load without squeezing it together.
+        let mut placed = None;
+        'variants: for (spec, offset) in &options[s] {
+            let Some(new) = cache.get(spec) else { continue };
+            let support = swapped_object(&original[s], spec, offset, new);
+            let (s_old_pose, s_new_pose) = (original[s].pose(), support.pose());
+            let located: Option<Vec<Located>> = dependents[s]
+                .iter()
+                .map(|&d| locate(&objects[d], &new_assets[d], &s_old_pose, &assets[s], &s_new_pose, new))
+                .collect();
+            let Some(located) = located else { continue };
+            for layout in [Layout::Relative, Layout::Offset, Layout::Packed] {
+                let Some(targets) = lay_out(&located, &assets[s], new, layout) else {
+                    continue;
+                };
+                let moves: Vec<_> = dependents[s]
+                    .iter()
+                    .zip(&located)
+                    .zip(targets)
+                    .map(|((&d, l), t)| (d, put(&objects[d], l, t, &s_new_pose, new)))
+                    .collect();
+                if !crowded(&moves) {
+                    placed = Some((support, new.clone(), moves));
+                    break 'variants;
+                }
+            }
+        }
+        match placed {
+            Some((support, new, moves)) => {
+                objects[s] = support;
+                new_assets[s] = new;
+                for (d, (p, _, _)) in moves {
+                    objects[d].position = p;
+                }
+            }
+            None => level[roots[s]] = 1,
         }
     }
     let full = objects;
