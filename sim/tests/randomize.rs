@@ -98,12 +98,6 @@ fn object_swaps_keep_the_layout_and_fit_the_original_boxes() {
         .zip(&scene.objects)
         .filter(|(a, b)| a.variant != b.variant)
         .count();
-    eprintln!(
-        "STATS swapped {} reseated {} reverted {:?}",
-        report.swapped.len(),
-        report.reseated.len(),
-        report.reverted
-    );
     assert!(
         swapped * 2 > base.objects.len(),
         "{swapped} of {} swapped",

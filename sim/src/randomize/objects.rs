@@ -9,10 +9,13 @@
 //! variant has (clamped to its limits) and dropped for others.
 //!
 //! Objects resting on a swapped support are moved onto the new support's matching surface
-//! (the shelf at the most similar relative height that is large and tall enough), at the same
-//! relative place on it. When the result would not validate (two small objects squeezed
-//! together on a smaller shelf, say), the support and everything on it go back to the
-//! original, so the returned scene always validates.
+//! (the shelf at the most similar relative height that is large and tall enough): at the same
+//! relative place on it, else at the same distance from its corner, else packed in rows in
+//! their old order; the support's candidate variants are tried in turn until one takes its
+//! whole load without squeezing objects together. When none does, or the result would not
+//! validate, the support keeps its original model and its load is swapped in place; failing
+//! that, the support and everything on it go back to the original, so the returned scene
+//! always validates.
 
 use std::collections::HashMap;
 
