@@ -21,6 +21,7 @@
 
 pub mod assets;
 pub mod env;
+pub mod randomize;
 pub mod scene;
 pub mod sensors;
 pub mod world;

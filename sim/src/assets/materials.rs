@@ -11,6 +11,15 @@
 //!   (dry static coefficients against a like or common surface, rounded);
 //! - restitution: typical drop-test coefficients of restitution (rubber ≈ 0.8, hard plastics
 //!   ≈ 0.45, wood ≈ 0.4, ceramics and glass ≈ 0.3, soft goods ≈ 0.05), rounded.
+//!
+//! [`Material::ranges`] gives the span each property takes over the real materials a class
+//! stands for, for domain randomisation: density spans are the sources' ranges above (oak,
+//! carbon and stainless steels 7480–8050, marble, glass, porcelain, ABS, natural rubber, foam
+//! grades; paper and board 700–1150 from the same density table); friction spans are the
+//! sources' dry static ranges where the table gives one (wood on wood 0.25–0.5 widened to 0.6
+//! for finished surfaces, steel on steel 0.5–0.8, rubber 0.8–1.16); the remaining spans
+//! (soft goods, foliage, plaster, restitution of every class) are ±25–50 % around the typical
+//! value, an assumption rather than a measurement. Every span contains the typical value.
 
 use serde::{Deserialize, Serialize};
 
@@ -72,6 +81,34 @@ pub struct MaterialProps {
     pub density: f64,
     /// Base colour, RGBA in [0, 1].
     pub rgba: [f64; 4],
+}
+
+/// The span of each physical property over the real materials a [`Material`] class stands for
+/// (see the module docs for sources): `[low, high]` pairs with `low ≤ typical ≤ high`.
+///
+/// ```
+/// use hearth_sim::assets::Material;
+/// let r = Material::Wood.ranges();
+/// let p = Material::Wood.props();
+/// assert!(r.density[0] <= p.density && p.density <= r.density[1]);
+/// assert_eq!(Material::Metal.ranges().friction, [0.5, 0.8]);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialRanges {
+    /// Coulomb friction coefficient.
+    pub friction: [f64; 2],
+    /// Coefficient of restitution.
+    pub restitution: [f64; 2],
+    /// Density, kg/m³.
+    pub density: [f64; 2],
+}
+
+const fn ranges(friction: [f64; 2], restitution: [f64; 2], density: [f64; 2]) -> MaterialRanges {
+    MaterialRanges {
+        friction,
+        restitution,
+        density,
+    }
 }
 
 const fn props(friction: f64, restitution: f64, density: f64, rgba: [f64; 4]) -> MaterialProps {
@@ -151,6 +188,38 @@ impl Material {
             Material::Foam => props(0.8, 0.05, 35.0, [0.95, 0.95, 0.92, 1.0]),
             Material::Foliage => props(0.6, 0.1, 100.0, [0.2, 0.55, 0.2, 1.0]),
             Material::Plaster => props(0.6, 0.2, 1200.0, [0.93, 0.92, 0.9, 1.0]),
+        }
+    }
+}
+
+impl Material {
+    /// Spans of friction, restitution and density for randomisation (see
+    /// [`MaterialRanges`]); each contains the typical value of [`Material::props`].
+    ///
+    /// ```
+    /// use hearth_sim::assets::Material;
+    /// for m in Material::ALL {
+    ///     let (r, p) = (m.ranges(), m.props());
+    ///     assert!(r.friction[0] <= p.friction && p.friction <= r.friction[1]);
+    ///     assert!(r.restitution[0] <= p.restitution && p.restitution <= r.restitution[1]);
+    /// }
+    /// ```
+    pub fn ranges(self) -> MaterialRanges {
+        match self {
+            Material::Wood => ranges([0.25, 0.6], [0.3, 0.5], [600.0, 900.0]),
+            Material::Metal => ranges([0.5, 0.8], [0.2, 0.4], [7480.0, 8050.0]),
+            Material::Marble => ranges([0.3, 0.5], [0.15, 0.3], [2560.0, 2800.0]),
+            Material::Fabric => ranges([0.5, 0.9], [0.02, 0.1], [50.0, 120.0]),
+            Material::Plastic => ranges([0.25, 0.5], [0.35, 0.55], [1020.0, 1080.0]),
+            Material::Glass => ranges([0.3, 0.6], [0.2, 0.4], [2400.0, 2800.0]),
+            Material::Ceramic => ranges([0.4, 0.65], [0.2, 0.4], [2300.0, 2500.0]),
+            Material::Leather => ranges([0.45, 0.75], [0.05, 0.15], [700.0, 1000.0]),
+            Material::Stone => ranges([0.45, 0.75], [0.1, 0.3], [2200.0, 2700.0]),
+            Material::Paper => ranges([0.3, 0.5], [0.05, 0.15], [700.0, 1150.0]),
+            Material::Rubber => ranges([0.8, 1.16], [0.6, 0.9], [920.0, 1200.0]),
+            Material::Foam => ranges([0.6, 0.95], [0.02, 0.1], [24.0, 45.0]),
+            Material::Foliage => ranges([0.4, 0.8], [0.05, 0.15], [60.0, 150.0]),
+            Material::Plaster => ranges([0.45, 0.75], [0.1, 0.3], [1000.0, 1300.0]),
         }
     }
 }

@@ -33,7 +33,7 @@ use hearth_kinematics::{KinematicsError, RobotModel};
 use nalgebra::Vector3;
 
 pub use category::{Category, Placement, RoomType};
-pub use materials::{Material, MaterialProps, UnknownMaterial};
+pub use materials::{Material, MaterialProps, MaterialRanges, UnknownMaterial};
 pub use writer::Surface;
 
 /// Width of the wall opening a door variant fills, metres.

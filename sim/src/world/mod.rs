@@ -52,6 +52,7 @@ mod control;
 mod error;
 mod obstacles;
 mod physics;
+mod properties;
 mod readout;
 mod scene_load;
 mod snapshot;
