@@ -9,6 +9,11 @@
 //!   doors, fridges, tables, chairs, …, bowls and mugs), with a material table.
 //! - [`scene`]: the scene file format, procedural homes, traversability and room maps, URDF
 //!   export and scene statistics.
+//! - [`sensors`]: cameras (wgpu rasteriser and CPU ray caster, eight modalities), LiDAR and
+//!   occupancy grids.
+//! - [`env`]: Gymnasium-shaped environments and tasks built from a TOML file, vectorised.
+//! - [`randomize`]: seeded domain randomisation of object models, visual and physical
+//!   materials, poses and sensor noise.
 //!
 //! ```
 //! use hearth_sim::scene::{generate, GenerateOptions, SceneInfo};
