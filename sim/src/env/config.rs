@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::{EnvError, EnvResult};
 use crate::assets::Category;
+use crate::randomize::{RandomizationConfig, RandomizeError};
 
 /// Where the home comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -465,6 +466,10 @@ pub struct EnvConfig {
     /// Episodes.
     #[serde(default)]
     pub episode: EpisodeConfig,
+    /// Domain randomisation (`[randomization]`, every kind off by default; see
+    /// `docs/randomization.md`).
+    #[serde(default)]
+    pub randomization: RandomizationConfig,
 }
 
 /// Observation names an env can produce.
@@ -541,6 +546,13 @@ impl EnvConfig {
     /// # Errors
     /// [`EnvError::Config`] naming the key.
     pub fn validate(&self) -> EnvResult<()> {
+        self.randomization.validate().map_err(|e| match e {
+            RandomizeError::InvalidValue { key, value, reason } => EnvError::Config {
+                key: format!("randomization.{key}"),
+                reason: format!("= {value}: {reason}"),
+            },
+            other => EnvError::Randomize(other),
+        })?;
         if !matches!(self.robot.name.as_str(), "turtlebot" | "locobot" | "fetch") {
             return Err(bad(
                 "robot.name",

@@ -11,12 +11,13 @@ use super::error::{EnvError, EnvResult};
 use super::spaces::{DType, Obs, ObsData, Space};
 use super::tasks::{BuildContext, Ending, Metrics, ResetContext, StepContext, Task};
 use crate::assets::Category as AssetCategory;
+use crate::randomize::{Randomizer, Stream, add_depth_noise, perturb_pose2d, randomize_objects};
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
     ModalitySet, OccupancyGrid, OccupancyGridSpec, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
 };
-use crate::world::{BUILDING_PREFIX, ModelHandle, Snapshot, World, WorldConfig};
+use crate::world::{BUILDING_PREFIX, LoadedScene, ModelHandle, Snapshot, World, WorldConfig};
 
 /// What an env reports besides observations and reward.
 ///
@@ -98,6 +99,25 @@ pub struct Env {
     started: bool,
     /// Scratch for `task_obs`.
     task_obs: Vec<f32>,
+    /// What `load_scene` spawned (physical randomisation works on it).
+    loaded: LoadedScene,
+    /// Domain randomisation, when the config turns any on.
+    randomization: Option<Randomization>,
+    /// This episode's camera mount perturbation (identity without one).
+    camera_offset: Isometry3<f64>,
+    /// This episode's depth-noise stream.
+    noise_rng: Pcg64Mcg,
+}
+
+/// Domain-randomisation state of an env: the unrandomised home, the draws so far.
+struct Randomization {
+    randomizer: Randomizer,
+    /// The home as configured; every draw starts from it.
+    base: SceneFile,
+    /// Resets so far: reset `e` gets draw `e`.
+    resets: u64,
+    /// Draw epoch the world now carries.
+    epoch: Option<u64>,
 }
 
 impl std::fmt::Debug for Env {
@@ -140,6 +160,24 @@ impl Env {
     pub fn new(config: EnvConfig) -> EnvResult<Self> {
         config.validate()?;
         let home = home_of(&config)?;
+        let randomization = if config.randomization.any() {
+            Some(Randomization {
+                randomizer: Randomizer::new(config.randomization.clone(), config.randomization.seed)?,
+                base: home.clone(),
+                resets: 0,
+                epoch: None,
+            })
+        } else {
+            None
+        };
+        let mut env = Self::build(config, &home)?;
+        env.randomization = randomization;
+        Ok(env)
+    }
+
+    /// Builds the env's world, maps, task and sensors on `home`.
+    fn build(config: EnvConfig, home: &SceneFile) -> EnvResult<Self> {
+        let home = home.clone();
         let world_config = WorldConfig {
             timestep: config.physics.timestep,
             substeps: config.physics.substeps,
@@ -210,9 +248,18 @@ impl Env {
         let wants = |n: &str| names.contains(&n);
         let lidar = if wants("scan") || wants("scan_16") || wants("occupancy_grid") {
             let l = &config.sensors.lidar;
-            let noise = LidarNoise {
-                dropout: l.dropout,
-                gaussian_std: l.noise_std,
+            let extra = &config.randomization.noise;
+            // Randomisation's LiDAR noise, when set, replaces the sensor's own.
+            let noise = if extra.lidar_dropout > 0.0 || extra.lidar_std > 0.0 {
+                LidarNoise {
+                    dropout: extra.lidar_dropout,
+                    gaussian_std: extra.lidar_std,
+                }
+            } else {
+                LidarNoise {
+                    dropout: l.dropout,
+                    gaussian_std: l.noise_std,
+                }
             };
             let visuals = VisualScene::from_world(&world);
             let own = model_items(&visuals, &world, robot)?;
@@ -280,6 +327,10 @@ impl Env {
             episode_seed: 0,
             started: false,
             config,
+            loaded,
+            randomization: None,
+            camera_offset: Isometry3::identity(),
+            noise_rng: Pcg64Mcg::seed_from_u64(0),
         };
         env.spaces = env.describe();
         Ok(env)
@@ -461,14 +512,16 @@ impl Env {
     /// # Errors
     /// [`EnvError::Task`] when no start and goal fit the task; sensor errors.
     pub fn reset(&mut self, seed: u64) -> EnvResult<(Obs, Info)> {
+        let episode = self.randomize()?;
         self.world.restore(&self.home)?;
         self.rng = Pcg64Mcg::seed_from_u64(seed);
         self.episode_seed = seed;
-        let [x, y, yaw] = self.task.reset(ResetContext {
+        let start = self.task.reset(ResetContext {
             world: &mut self.world,
             maps: &self.maps,
             rng: &mut self.rng,
         })?;
+        let [x, y, yaw] = self.perturb_start(episode, start);
         let z = self.world.base_pose(self.robot)?.translation.z;
         let pose = Isometry3::from_parts(
             Translation3::new(x, y, z),
@@ -596,9 +649,91 @@ impl Env {
     }
 
     /// Renders the camera and scans the LiDARs.
+    /// Applies the randomisation of the coming episode: a new draw (object models → a rebuilt
+    /// world; physical properties; visual materials) when the episode starts a new draw epoch,
+    /// and this episode's camera offset and noise stream. Returns the episode's index.
+    fn randomize(&mut self) -> EnvResult<Option<u64>> {
+        let Some(mut r) = self.randomization.take() else {
+            return Ok(None);
+        };
+        let result = self.apply_draw(&mut r);
+        self.randomization = Some(r);
+        result
+    }
+
+    fn apply_draw(&mut self, r: &mut Randomization) -> EnvResult<Option<u64>> {
+        let e = r.resets;
+        let epoch = r.randomizer.epoch(e);
+        if r.epoch != Some(epoch) {
+            let config = r.randomizer.config().clone();
+            if config.objects.enabled {
+                let mut scene = r.base.clone();
+                randomize_objects(&mut scene, &config.objects, &mut r.randomizer.rng(e, Stream::Objects))?;
+                *self = Self::build(self.config.clone(), &scene)?;
+            }
+            self.world.restore(&self.home)?;
+            r.randomizer.apply_world(e, &mut self.world, &self.loaded)?;
+            if let Some(camera) = &mut self.camera {
+                r.randomizer.apply_camera(e, &self.world, camera)?;
+            }
+            self.home = self.world.snapshot();
+            r.epoch = Some(epoch);
+        }
+        self.camera_offset = r.randomizer.camera_offset(e);
+        self.noise_rng = r.randomizer.rng(e, Stream::Noise);
+        r.resets += 1;
+        Ok(Some(e))
+    }
+
+    /// The task's start, perturbed by the configured start-pose noise when that lands on the
+    /// traversability map (otherwise unperturbed).
+    fn perturb_start(&self, episode: Option<u64>, start: [f64; 3]) -> [f64; 3] {
+        let (Some(e), Some(r)) = (episode, &self.randomization) else {
+            return start;
+        };
+        let p = &r.randomizer.config().pose;
+        if p.robot_xy_std <= 0.0 && p.robot_yaw_std <= 0.0 {
+            return start;
+        }
+        let mut rng = r.randomizer.rng(e, Stream::RobotPose);
+        let (xy, yaw) = perturb_pose2d(
+            [start[0], start[1]],
+            start[2],
+            p.robot_xy_std,
+            p.robot_yaw_std,
+            &mut rng,
+        );
+        if self.maps.is_traversable(xy) {
+            [xy[0], xy[1], yaw]
+        } else {
+            [start[0], start[1], yaw]
+        }
+    }
+
+    /// The episode index and draw epoch of the last reset, when randomisation is on.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// let toml = "[task]\nname = \"point_nav_random\"\n[randomization.physics]\nenabled = true\nfriction = true\n";
+    /// let mut env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// env.reset(0)?;
+    /// assert_eq!(env.randomization_episode(), Some((0, 0)));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn randomization_episode(&self) -> Option<(u64, u64)> {
+        let r = self.randomization.as_ref()?;
+        let e = r.resets.checked_sub(1)?;
+        Some((e, r.randomizer.epoch(e)))
+    }
+
     fn sense(&mut self) -> EnvResult<()> {
         if let Some(camera) = &mut self.camera {
-            camera.render(&self.world, self.camera_set)?;
+            if self.camera_offset == Isometry3::identity() {
+                camera.render(&self.world, self.camera_set)?;
+            } else {
+                let pose = camera.pose(&self.world)? * self.camera_offset;
+                camera.render_from(&self.world, &pose, self.camera_set)?;
+            }
         }
         if let Some(rig) = &mut self.lidar {
             let base = self.world.base_pose(self.robot)?;
@@ -673,7 +808,16 @@ impl Env {
                     let f = camera.frame();
                     match name {
                         "rgb" => ObsData::U8(f.rgb.clone()),
-                        "depth" => ObsData::F32(f.depth.clone()),
+                        "depth" => {
+                            let mut depth = f.depth.clone();
+                            if let Some(r) = &self.randomization {
+                                let noise = r.randomizer.depth_noise();
+                                if !noise.is_none() {
+                                    add_depth_noise(&mut depth, &noise, &mut self.noise_rng);
+                                }
+                            }
+                            ObsData::F32(depth)
+                        }
                         "normal" => ObsData::F32(f.normal.iter().flatten().copied().collect()),
                         "seg" => ObsData::U32(f.seg.clone()),
                         "ins_seg" => ObsData::U32(f.ins_seg.clone()),

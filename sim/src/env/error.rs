@@ -1,5 +1,6 @@
 //! [`EnvError`]: configuration, scene, sensor and action errors of an environment.
 
+use crate::randomize::RandomizeError;
 use crate::scene::SceneError;
 use crate::sensors::SensorError;
 use crate::world::{LoadSceneError, WorldError};
@@ -54,6 +55,9 @@ pub enum EnvError {
     /// A sensor failed.
     #[error(transparent)]
     Sensor(#[from] SensorError),
+    /// Domain randomisation could not be applied.
+    #[error(transparent)]
+    Randomize(#[from] RandomizeError),
 }
 
 /// Shorthand.

@@ -89,7 +89,12 @@ impl VecEnv {
         }
         let envs = (0..n)
             .into_par_iter()
-            .map(|_| Env::new(config.clone()))
+            .map(|i| {
+                // Each env draws its own randomisation sequence.
+                let mut config = config.clone();
+                config.randomization.seed = config.randomization.seed.wrapping_add(i as u64);
+                Env::new(config)
+            })
             .collect::<EnvResult<Vec<_>>>()?;
         Ok(Self {
             envs,

@@ -40,6 +40,10 @@ fn default_min_fill() -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RandomizationConfig {
+    /// Run seed of the draws: the same seed gives the same sequence of randomised episodes.
+    /// A vectorised env offsets it by the env's index.
+    #[serde(default)]
+    pub seed: u64,
     /// Draw a new randomisation every this many episodes (1 = every episode); the episodes in
     /// between reuse the last draw. Applies to objects, visual and physical materials; pose
     /// perturbations are drawn every episode.
@@ -65,6 +69,7 @@ pub struct RandomizationConfig {
 impl Default for RandomizationConfig {
     fn default() -> Self {
         RandomizationConfig {
+            seed: 0,
             every_k_episodes: 1,
             objects: ObjectRandomization::default(),
             visual: VisualRandomizationConfig::default(),
