@@ -41,14 +41,23 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.envs > 0 && a.steps > 0, "--envs and --steps must be positive");
     let config = EnvConfig::load(&a.config).with_context(|| format!("loading {}", a.config.display()))?;
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(a.seed);
-    let mut action = || [rng.random_range(-1.0f32..1.0), rng.random_range(-1.0f32..1.0)];
+    // Uniform random actions over the whole action space (base, and the arm for the
+    // manipulation tasks), drawn into a reused buffer.
+    let mut fill = |out: &mut [f32]| {
+        for x in out {
+            *x = rng.random_range(-1.0f32..1.0);
+        }
+    };
 
     let mut env = Env::new(config.clone())?;
+    let dim = env.action_space().size();
+    let mut action = vec![0.0f32; dim];
     env.reset(a.seed)?;
     let start = Instant::now();
     let mut episodes = 0;
     for _ in 0..a.steps {
-        let s = env.step(&action())?;
+        fill(&mut action);
+        let s = env.step(&action)?;
         if s.terminated || s.truncated {
             episodes += 1;
             env.reset(a.seed + episodes)?;
@@ -61,12 +70,10 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
     let mut envs = VecEnv::new(&config, a.envs)?;
     let after = rss_mib();
     envs.reset(a.seed)?;
-    let mut actions = vec![0.0f32; 2 * a.envs];
+    let mut actions = vec![0.0f32; dim * a.envs];
     let start = Instant::now();
     for _ in 0..a.steps {
-        for pair in actions.chunks_mut(2) {
-            pair.copy_from_slice(&action());
-        }
+        fill(&mut actions);
         envs.step(&actions)?;
     }
     let vec_rate = (a.steps * a.envs) as f64 / start.elapsed().as_secs_f64();
