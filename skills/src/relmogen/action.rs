@@ -85,6 +85,11 @@ pub enum Subgoal {
 
 impl Subgoal {
     /// Whether this is an arm subgoal.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{PushDirection, Subgoal};
+    /// assert!(Subgoal::Arm { u: 1, v: 2, direction: PushDirection::AgainstNormal }.is_arm());
+    /// ```
     pub fn is_arm(&self) -> bool {
         matches!(self, Subgoal::Arm { .. })
     }
@@ -118,12 +123,26 @@ pub struct ActionSpec {
 
 impl ActionSpec {
     /// Cells of one discrete map: (H/4)·(W/4)·D.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{ActionForm, ActionSpec};
+    /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
+    /// assert_eq!(spec.map_size(), 12 * 16 * 4);
+    /// ```
     pub fn map_size(&self) -> usize {
         (self.width / 4) as usize * (self.height / 4) as usize * self.bins
     }
 
     /// The action space: a box of 7 entries in [−1, 1], or 1 integer entry in
     /// [0, 2·[`ActionSpec::map_size`] − 1].
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{ActionForm, ActionSpec};
+    /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
+    /// assert_eq!(spec.space().shape, vec![1]);
+    /// let c = ActionSpec { form: ActionForm::Continuous, ..spec };
+    /// assert_eq!(c.space().shape, vec![7]);
+    /// ```
     pub fn space(&self) -> Space {
         match self.form {
             ActionForm::Continuous => Space::boxed("action", &[7], DType::F32, -1.0, 1.0),
@@ -132,12 +151,25 @@ impl ActionSpec {
     }
 
     /// The discrete index of base cell (`row`, `col`), yaw bin `bin`; `None` out of range.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{ActionForm, ActionSpec};
+    /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
+    /// assert_eq!(spec.base_index(0, 1, 2), Some(6));
+    /// assert_eq!(spec.base_index(12, 0, 0), None);
+    /// ```
     pub fn base_index(&self, row: u32, col: u32, bin: usize) -> Option<usize> {
         self.cell_index(row, col, bin)
     }
 
     /// The discrete index of arm cell (`row`, `col`), direction bin `bin`; `None` out of
     /// range.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{ActionForm, ActionSpec};
+    /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
+    /// assert_eq!(spec.arm_index(0, 0, 0), Some(spec.map_size()));
+    /// ```
     pub fn arm_index(&self, row: u32, col: u32, bin: usize) -> Option<usize> {
         self.cell_index(row, col, bin).map(|i| i + self.map_size())
     }
@@ -152,6 +184,16 @@ impl ActionSpec {
     /// # Errors
     /// [`ReLMoGenError::BadAction`] for a wrong length, a non-finite entry, an entry outside
     /// [−1, 1] (continuous), or an index that is not an integer in range (discrete).
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::{ActionForm, ActionSpec};
+    /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
+    /// use hearth_skills::relmogen::Subgoal;
+    /// let Subgoal::BaseAtPixel { u, v, yaw } = spec.decode(&[5.0]).unwrap() else { panic!() };
+    /// assert_eq!((u, v), (6, 2));
+    /// assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    /// assert!(spec.decode(&[0.5]).is_err());
+    /// ```
     pub fn decode(&self, action: &[f32]) -> ReLMoGenResult<Subgoal> {
         let want = self.space().size();
         if action.len() != want {

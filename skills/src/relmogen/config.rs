@@ -54,6 +54,11 @@ pub enum ReLMoGenError {
 }
 
 /// Result of the ReLMoGen env.
+///
+/// ```
+/// let r: hearth_skills::relmogen::ReLMoGenResult<u8> = Ok(1);
+/// assert!(r.is_ok());
+/// ```
 pub type ReLMoGenResult<T> = Result<T, ReLMoGenError>;
 
 pub(crate) fn bad(key: &str, reason: impl Into<String>) -> ReLMoGenError {
@@ -122,6 +127,11 @@ impl Default for PushSection {
 
 impl PushSection {
     /// The push skill's settings.
+    ///
+    /// ```
+    /// let p = hearth_skills::relmogen::PushSection { distance: 0.2, ..Default::default() };
+    /// assert_eq!(p.settings().distance, 0.2);
+    /// ```
     pub fn settings(&self) -> PushSettings {
         PushSettings {
             distance: self.distance,
@@ -233,6 +243,13 @@ impl ReLMoGenConfig {
     /// # Errors
     /// [`ReLMoGenError::Parse`] naming an unknown key and its line; [`ReLMoGenError::Config`]
     /// for values out of range; errors of the env config.
+    ///
+    /// ```
+    /// let c = hearth_skills::relmogen::ReLMoGenConfig::from_toml(
+    ///     "[env.robot]\nname = \"fetch\"\n[env.task]\nname = \"interactive_nav\"\n",
+    /// ).unwrap();
+    /// assert_eq!(c.failure_penalty, 0.1);
+    /// ```
     pub fn from_toml(text: &str) -> ReLMoGenResult<Self> {
         Self::parse(text, None)
     }
@@ -273,6 +290,14 @@ impl ReLMoGenConfig {
     ///
     /// # Errors
     /// [`ReLMoGenError::Config`] when neither `env_file` nor `[env]` gave one.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::ReLMoGenConfig;
+    /// let mut c = ReLMoGenConfig::from_toml("[env.robot]\nname = \"fetch\"\n[env.task]\nname = \"push_cabinet\"\n").unwrap();
+    /// assert_eq!(c.env_config().unwrap().task.name, "push_cabinet");
+    /// c.env = None;
+    /// assert!(c.env_config().is_err());
+    /// ```
     pub fn env_config(&self) -> ReLMoGenResult<&EnvConfig> {
         self.env
             .as_ref()
@@ -283,6 +308,12 @@ impl ReLMoGenConfig {
     ///
     /// # Errors
     /// As [`ReLMoGenConfig::env_config`].
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::ReLMoGenConfig;
+    /// let c = ReLMoGenConfig::from_toml("[camera]\nwidth = 64\nheight = 64\n[env.robot]\nname = \"fetch\"\n[env.task]\nname = \"push_drawer\"\n").unwrap();
+    /// assert_eq!(c.camera_section().unwrap().width, 64);
+    /// ```
     pub fn camera_section(&self) -> ReLMoGenResult<&CameraSection> {
         match &self.camera {
             Some(c) => Ok(c),
@@ -294,6 +325,13 @@ impl ReLMoGenConfig {
     ///
     /// # Errors
     /// [`ReLMoGenError::Config`] naming the key.
+    ///
+    /// ```
+    /// use hearth_skills::relmogen::ReLMoGenConfig;
+    /// let mut c = ReLMoGenConfig::from_toml("[env.robot]\nname = \"fetch\"\n[env.task]\nname = \"push_drawer\"\n").unwrap();
+    /// c.direction_bins = 0;
+    /// assert!(c.validate().unwrap_err().to_string().contains("direction_bins"));
+    /// ```
     pub fn validate(&self) -> ReLMoGenResult<()> {
         let env = self.env_config()?;
         env.validate()?;

@@ -36,6 +36,10 @@ use crate::execution::Execution;
 use crate::push::{PushSettings, push_at_point, surface_at_pixel};
 
 /// Mask value of a pixel never tried.
+///
+/// ```
+/// assert_eq!(hearth_skills::relmogen::UNTRIED, 255);
+/// ```
 pub const UNTRIED: u8 = 255;
 
 /// Settings of a push dataset.
@@ -103,6 +107,12 @@ pub struct PushRecord {
 }
 
 /// The index of one location (`pushes.json`).
+///
+/// ```no_run
+/// let text = std::fs::read_to_string("out/loc_00000/pushes.json").unwrap();
+/// let index: hearth_skills::relmogen::LocationIndex = serde_json::from_str(&text).unwrap();
+/// println!("{} pushes from {:?}", index.pushes.len(), index.pose);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LocationIndex {
     /// Location number.
@@ -120,6 +130,12 @@ pub struct LocationIndex {
 }
 
 /// A location with its image and mask.
+///
+/// ```no_run
+/// # fn f(loc: hearth_skills::relmogen::Location) {
+/// assert_eq!(loc.mask.len() * 3, loc.rgb.len());
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Location {
     /// Index (pose, pushes).
@@ -131,6 +147,12 @@ pub struct Location {
 }
 
 /// Progress of [`PushDataset::write`].
+///
+/// ```no_run
+/// # fn f(p: &hearth_skills::relmogen::Progress) {
+/// eprint!("\r{}/{} {:.1} pushes/s", p.locations_done, p.locations, p.pushes_per_second);
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progress {
     /// Locations finished or skipped.
@@ -144,6 +166,11 @@ pub struct Progress {
 }
 
 /// What [`PushDataset::write`] did.
+///
+/// ```
+/// let s = hearth_skills::relmogen::DatasetSummary::default();
+/// assert_eq!((s.written, s.skipped, s.pushes_per_second), (0, 0, 0.0));
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct DatasetSummary {
     /// Locations written now.
@@ -198,6 +225,13 @@ impl PushDataset {
     /// # Errors
     /// [`ReLMoGenError::Config`] for bad settings or a scene without a robot placement or
     /// free floor; scene, world and sensor errors.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let mut data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// println!("{:?}", data);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn new(scene: &SceneFile, settings: DatasetSettings) -> ReLMoGenResult<Self> {
         if settings.locations == 0 {
             return Err(bad("locations", "must be at least 1"));
@@ -269,11 +303,25 @@ impl PushDataset {
     }
 
     /// The settings.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let mut data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// assert_eq!(data.settings().pushes_per_location, 20);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn settings(&self) -> &DatasetSettings {
         &self.settings
     }
 
     /// The physics world (as the last push left it).
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let mut data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// println!("{} models", data.world().models().count());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn world(&self) -> &World {
         &self.world
     }
@@ -284,6 +332,14 @@ impl PushDataset {
     ///
     /// # Errors
     /// World and sensor errors (a push that fails is a record, not an error).
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let mut data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// let loc = data.location(3)?;
+    /// assert_eq!(loc.index.pushes.len(), 20);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn location(&mut self, index: usize) -> ReLMoGenResult<Location> {
         let s = &self.settings;
         let mut rng = Pcg64Mcg::seed_from_u64(s.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(index as u64));
@@ -378,6 +434,14 @@ impl PushDataset {
     ///
     /// # Errors
     /// [`ReLMoGenError::Io`] for files that cannot be written; as [`PushDataset::location`].
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let mut data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// let summary = data.write("out".as_ref(), |p| eprint!("\\r{}/{}", p.locations_done, p.locations))?;
+    /// println!("{} written, {} skipped", summary.written, summary.skipped);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn write(&mut self, dir: &Path, mut progress: impl FnMut(&Progress)) -> ReLMoGenResult<DatasetSummary> {
         std::fs::create_dir_all(dir).map_err(|e| io_error(dir, e))?;
         let meta = serde_json::json!({

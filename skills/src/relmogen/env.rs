@@ -55,6 +55,14 @@ pub struct ReLMoGenInfo {
 }
 
 /// The result of [`ReLMoGenEnv::step`].
+///
+/// ```no_run
+/// # fn f(step: hearth_skills::relmogen::ReLMoGenStep) {
+/// if step.terminated || step.truncated {
+///     println!("episode over: {:?}", step.info.env.ending);
+/// }
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReLMoGenStep {
     /// Observations after the subgoal.
@@ -115,6 +123,13 @@ impl ReLMoGenEnv {
     ///
     /// # Errors
     /// Config errors naming the key; errors of [`Env::new`], the camera or the arm.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// assert_eq!(env.robot(), env.env().robot());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn new(config: ReLMoGenConfig) -> ReLMoGenResult<Self> {
         config.validate()?;
         let env = Env::new(config.env_config()?.clone())?;
@@ -173,41 +188,101 @@ impl ReLMoGenEnv {
     }
 
     /// The configuration.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// assert!(env.config().failure_penalty >= 0.0);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn config(&self) -> &ReLMoGenConfig {
         &self.config
     }
 
     /// The action space (see [`ActionSpec`]).
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// assert_eq!(env.action_space().name, "action");
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn action_space(&self) -> &Space {
         &self.space
     }
 
     /// How actions decode.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// let i = env.action_spec().arm_index(16, 16, 0).unwrap();
+    /// assert!(env.action_spec().decode(&[i as f32])?.is_arm());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn action_spec(&self) -> &ActionSpec {
         &self.spec
     }
 
     /// The observation spaces: the wrapped env's.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// assert_eq!(env.observation_spaces(), env.env().observation_spaces());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn observation_spaces(&self) -> &[Space] {
         self.env.observation_spaces()
     }
 
     /// The wrapped env.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// println!("{}", env.env().task_name());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn env(&self) -> &Env {
         &self.env
     }
 
     /// The wrapped env, writable (scripted set-ups and tests; see [`Env::world_mut`]).
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// env.reset(0)?;
+    /// let robot = env.robot();
+    /// env.env_mut().world_mut().tuck(robot)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn env_mut(&mut self) -> &mut Env {
         &mut self.env
     }
 
     /// The planner's head camera.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// assert_eq!(env.camera().config().intrinsics.width, 128);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn camera(&self) -> &Camera {
         &self.camera
     }
 
     /// The robot.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// let pose = env.env().world().base_pose(env.robot())?;
+    /// println!("{pose:?}");
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn robot(&self) -> ModelHandle {
         self.env.robot()
     }
@@ -216,6 +291,15 @@ impl ReLMoGenEnv {
     ///
     /// # Errors
     /// As [`Env::reset`].
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// let (obs, info) = env.reset(5)?;
+    /// assert_eq!(info.env.episode_seed, 5);
+    /// assert!(obs.get("rgb").is_some());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn reset(&mut self, seed: u64) -> ReLMoGenResult<(Obs, ReLMoGenInfo)> {
         let (obs, info) = self.env.reset(seed)?;
         self.rng = Pcg64Mcg::seed_from_u64(seed ^ 0x7265_6c6d_6f67_656e);
@@ -236,6 +320,16 @@ impl ReLMoGenEnv {
     /// [`ReLMoGenError::NotReset`] before a reset; [`ReLMoGenError::BadAction`] for an action
     /// [`ActionSpec::decode`] refuses (the world is not touched); env errors. A subgoal that
     /// fails is not an error: it is reported in the info and penalised.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut env = ReLMoGenEnv::new(config)?;
+    /// env.reset(0)?;
+    /// assert!(env.step(&[f32::NAN]).is_err());
+    /// let step = env.step(&[0.0])?;
+    /// println!("{:?}", step.info.failure_reason);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn step(&mut self, action: &[f32]) -> ReLMoGenResult<ReLMoGenStep> {
         if !self.started {
             return Err(ReLMoGenError::NotReset);

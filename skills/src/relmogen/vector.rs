@@ -7,6 +7,13 @@ use super::config::{ReLMoGenConfig, ReLMoGenError, ReLMoGenResult, bad};
 use super::env::{ReLMoGenEnv, ReLMoGenInfo, ReLMoGenStep};
 
 /// The result of [`ReLMoGenVecEnv::step`].
+///
+/// ```no_run
+/// # fn f(step: hearth_skills::relmogen::ReLMoGenVecStep) {
+/// let failed = step.infos.iter().filter(|i| !i.planner_success).count();
+/// println!("{failed} of {} subgoals failed", step.rewards.len());
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReLMoGenVecStep {
     /// Observations (after auto-reset for envs whose episode ended), batched env-major.
@@ -75,6 +82,13 @@ impl ReLMoGenVecEnv {
     ///
     /// # Errors
     /// As [`ReLMoGenEnv::new`]; [`ReLMoGenError::Config`] for `n == 0`.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// assert!(ReLMoGenVecEnv::new(&config, 0).is_err());
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn new(config: &ReLMoGenConfig, n: usize) -> ReLMoGenResult<Self> {
         if n == 0 {
             return Err(bad("envs", "must be at least 1"));
@@ -91,16 +105,37 @@ impl ReLMoGenVecEnv {
     }
 
     /// Number of envs.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// assert_eq!(envs.len(), 2);
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn len(&self) -> usize {
         self.envs.len()
     }
 
     /// Whether there are no envs (never: `new` refuses 0).
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// assert!(!envs.is_empty());
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.envs.is_empty()
     }
 
     /// The envs.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// assert_eq!(envs.envs().len(), 2);
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn envs(&self) -> &[ReLMoGenEnv] {
         &self.envs
     }
@@ -117,6 +152,14 @@ impl ReLMoGenVecEnv {
     ///
     /// # Errors
     /// The first env error.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// let obs = envs.reset(7)?;
+    /// assert!(obs.get("task_obs").is_some());
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn reset(&mut self, seed: u64) -> ReLMoGenResult<BatchedObs> {
         self.base_seed = seed;
         self.episodes.iter_mut().for_each(|e| *e = 0);
@@ -136,6 +179,15 @@ impl ReLMoGenVecEnv {
     /// # Errors
     /// [`ReLMoGenError::BadAction`] for a wrong total length or any action an env would
     /// refuse (nothing is stepped), or the first env error.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{ReLMoGenConfig, ReLMoGenVecEnv};
+    /// let config = ReLMoGenConfig::load("examples/configs/relmogen_push_drawer.toml".as_ref())?;
+    /// let mut envs = ReLMoGenVecEnv::new(&config, 2)?;
+    /// envs.reset(0)?;
+    /// let step = envs.step(&[0.0, 100.0])?;
+    /// assert_eq!(step.infos.len(), 2);
+    /// # Ok::<(), hearth_skills::relmogen::ReLMoGenError>(())
+    /// ```
     pub fn step(&mut self, actions: &[f32]) -> ReLMoGenResult<ReLMoGenVecStep> {
         let n = self.envs.len();
         let per = self.envs[0].action_space().size();
