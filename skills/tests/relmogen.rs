@@ -376,3 +376,22 @@ fn interactive_nav_takes_base_subgoals_towards_the_goal() {
     }
     assert_eq!(step.info.env.metrics.episode_length, 1);
 }
+
+#[test]
+fn a_discrete_arm_index_pushes_the_drawer_in_physics() {
+    let mut env = ReLMoGenEnv::new(config("physics", "discrete", "execution = \"physics\"")).unwrap();
+    env.reset(3).unwrap();
+    let before = opening(&env);
+    // The score-map cell holding the drawer front's pixel, pushed along −normal (bin 0).
+    let continuous = push_drawer_action(&env);
+    let pixel = |x: f32| ((x + 1.0) * 0.5 * (SIDE - 1) as f32).round() as u32;
+    let (u, v) = (pixel(continuous[4]), pixel(continuous[5]));
+    let index = env.action_spec().arm_index(v / 4, u / 4, 0).unwrap();
+    let step = env.step(&[index as f32]).unwrap();
+    let info = &step.info;
+    assert_eq!(info.subgoal, "arm");
+    assert!(info.planner_success, "{info:?}");
+    let after = opening(&env);
+    assert!(after < before - 0.1, "opening {before:.3} → {after:.3}: {info:?}");
+    assert!(step.reward > 0.05 && info.moved > 0.1, "{} {info:?}", step.reward);
+}

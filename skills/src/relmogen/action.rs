@@ -210,7 +210,7 @@ impl ActionSpec {
                 if let Some((k, x)) = action.iter().enumerate().find(|(_, x)| x.abs() > 1.0) {
                     return Err(ReLMoGenError::BadAction(format!("entry {k} = {x} is outside [-1, 1]")));
                 }
-                let a: Vec<f64> = action.iter().map(|&x| f64::from(x)).collect();
+                let a: [f64; 7] = std::array::from_fn(|k| f64::from(action[k]));
                 let unit = |x: f64| (x + 1.0) * 0.5;
                 if a[0] > 0.0 {
                     Ok(Subgoal::Arm {
