@@ -395,3 +395,35 @@ fn a_discrete_arm_index_pushes_the_drawer_in_physics() {
     assert!(after < before - 0.1, "opening {before:.3} → {after:.3}: {info:?}");
     assert!(step.reward > 0.05 && info.moved > 0.1, "{} {info:?}", step.reward);
 }
+
+#[test]
+fn a_discrete_base_index_drives_to_the_floor_point_it_sees() {
+    let mut env = ReLMoGenEnv::new(config("floor", "discrete", "")).unwrap();
+    env.reset(2).unwrap();
+    // Face the open west half of the room (a test hook: the next step scores what it finds).
+    let robot = env.robot();
+    let z = env.env().world().base_pose(robot).unwrap().translation.z;
+    let west = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::new(2.5, 2.0, z),
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::PI),
+    );
+    env.env_mut().world_mut().place(robot, &west).unwrap();
+    let spec = *env.action_spec();
+    // Bottom-centre cell of the base map, yaw bin 2 of 8: a quarter turn to the left.
+    let index = spec.base_index(SIDE / 4 - 2, SIDE / 8, 2).unwrap();
+    let step = env.step(&[index as f32]).unwrap();
+    let info = &step.info;
+    assert!(info.planner_success, "{info:?}");
+    let [gx, gy, gyaw] = info.target.unwrap();
+    assert!(gx < 2.0 && (gy - 2.0).abs() < 0.3, "the floor ahead: {:?}", info.target);
+    let pose = env.env().world().base_pose(robot).unwrap();
+    assert!(
+        (pose.translation.x - gx).hypot(pose.translation.y - gy) < 0.12,
+        "{pose:?} {info:?}"
+    );
+    let yaw = pose.rotation.euler_angles().2;
+    assert!(hearth_sim::kinematics::wrap_angle(yaw - gyaw).abs() < 0.12);
+    assert!(
+        hearth_sim::kinematics::wrap_angle(gyaw - (std::f64::consts::PI + std::f64::consts::FRAC_PI_2)).abs() < 1e-6
+    );
+}
