@@ -19,6 +19,11 @@ const SIDE: u32 = 64;
 /// A 5 × 4 m kitchen: a bottom cabinet with drawers against the east wall, the Fetch at
 /// (2, 2) facing it.
 fn kitchen() -> SceneFile {
+    kitchen_with(1)
+}
+
+/// The kitchen with bottom cabinet `variant` (1: three drawers, 0: two doors).
+fn kitchen_with(variant: usize) -> SceneFile {
     let mut s = SceneFile::empty("relmogen kitchen");
     s.building.rooms.push(Room {
         name: "kitchen".into(),
@@ -31,7 +36,7 @@ fn kitchen() -> SceneFile {
         Wall::new("west", [0.0, 0.0], [0.0, 4.0], 2.5, 0.12),
         Wall::new("east", [5.0, 0.0], [5.0, 4.0], 2.5, 0.12),
     ];
-    let mut cabinet = SceneObject::new("cabinet", "bottom_cabinet", 1, [4.55, 2.0, 0.0]);
+    let mut cabinet = SceneObject::new("cabinet", "bottom_cabinet", variant, [4.55, 2.0, 0.0]);
     cabinet.orientation = Orientation::Yaw(std::f64::consts::PI);
     cabinet.fixed = true;
     s.objects.push(cabinet);
@@ -426,4 +431,31 @@ fn a_discrete_base_index_drives_to_the_floor_point_it_sees() {
     assert!(
         hearth_sim::kinematics::wrap_angle(gyaw - (std::f64::consts::PI + std::f64::consts::FRAC_PI_2)).abs() < 1e-6
     );
+}
+
+#[test]
+fn push_cabinet_runs_arm_subgoals_on_the_doors() {
+    let dir = std::env::temp_dir().join(format!("hearth-relmogen-doors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("kitchen.json");
+    kitchen_with(0).save(&path).unwrap();
+    let toml = format!(
+        "[env.scene]\nfile = {path:?}\n[env.robot]\nname = \"fetch\"\n[env.task]\nname = \"push_cabinet\"\n\
+         [env.sensors]\nmodalities = [\"depth\"]\n[env.sensors.camera]\nwidth = 32\nheight = 32\nbackend = \"raycast\"\n"
+    );
+    let mut env = ReLMoGenEnv::new(ReLMoGenConfig::from_toml(&toml).unwrap()).unwrap();
+    env.reset(1).unwrap();
+    let (object, joints) = env.env().task_objects().pop().unwrap();
+    assert_eq!(object, "cabinet");
+    assert!(
+        !joints.is_empty() && joints.iter().all(|j| j.starts_with("door_")),
+        "{joints:?}"
+    );
+    // Push what the image centre sees, straight ahead.
+    let step = env.step(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    let info = &step.info;
+    assert_eq!(info.subgoal, "arm");
+    assert!(info.planner_success != info.failure_reason.is_some(), "{info:?}");
+    assert!(info.planning_time > 0.0 && info.skill_time > 0.0, "{info:?}");
+    assert_eq!(step.obs.get("depth").unwrap().len(), 32 * 32);
 }
