@@ -480,3 +480,48 @@ fn bench_sim_writes_json() {
     assert!(err.contains("/nonexistent/home.json"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn dataset_pushes_writes_locations_and_resumes() {
+    let dir = std::env::temp_dir().join(format!("hearth-cli-pushes-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_str().unwrap();
+    let args = [
+        "dataset",
+        "pushes",
+        "--generate",
+        "1",
+        "--rooms",
+        "2",
+        "--locations",
+        "1",
+        "--pushes-per-location",
+        "2",
+        "--kinematic",
+        "--backend",
+        "raycast",
+        "--size",
+        "32",
+        "--out",
+        out,
+    ];
+    let o = hearth(&args);
+    assert!(o.status.success(), "dataset pushes failed: {}", stderr(&o));
+    assert!(
+        stdout(&o).contains("1 locations written") && stdout(&o).contains("pushes/s"),
+        "{}",
+        stdout(&o)
+    );
+    for f in ["rgb.png", "mask.npy", "mask_rgb.png", "pushes.json"] {
+        assert!(dir.join("loc_00000").join(f).is_file(), "{f}");
+    }
+    let again = hearth(&args);
+    assert!(
+        stdout(&again).contains("0 locations written, 1 skipped"),
+        "{}",
+        stdout(&again)
+    );
+    let err = fails(&["dataset", "pushes", "--generate", "1", "--locations", "0", "--out", out]);
+    assert!(err.contains("locations"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,6 +6,7 @@ mod bench_lidar;
 mod bench_plan;
 mod bench_render;
 mod bench_sim;
+mod dataset;
 mod demo;
 mod home;
 mod kin;
@@ -38,6 +39,9 @@ enum Command {
     /// Render camera modalities (RGB, depth, normals, segmentation, flows, point cloud) from
     /// a robot in a home and write PNG images and NumPy arrays.
     Render(render::RenderArgs),
+    /// Datasets for learning (push outcomes per pixel).
+    #[command(subcommand)]
+    Dataset(dataset::DatasetCommand),
 }
 
 /// Runs one parsed command.
@@ -48,6 +52,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(c) => bench::run(c),
         Command::Scene(c) => scene::run(c),
         Command::Render(a) => render::run(a),
+        Command::Dataset(c) => dataset::run(c),
     }
 }
 
