@@ -41,6 +41,10 @@ pub struct PushesArgs {
     /// Camera backend: auto, wgpu or raycast.
     #[arg(long, default_value = "auto")]
     backend: String,
+    /// Fraction of locations facing articulated furniture (drawers and doors opened at random);
+    /// the rest are uniform on the floor.
+    #[arg(long, default_value_t = 0.75)]
+    furniture_views: f64,
 }
 
 pub fn run(command: DatasetCommand) -> anyhow::Result<()> {
@@ -50,6 +54,11 @@ pub fn run(command: DatasetCommand) -> anyhow::Result<()> {
 }
 
 fn pushes(a: PushesArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&a.furniture_views),
+        "--furniture-views must be in [0, 1], got {}",
+        a.furniture_views
+    );
     let home = a.home.load(Some("fetch"))?;
     let backend: Backend = a.backend.parse()?;
     let settings = DatasetSettings {
@@ -64,9 +73,14 @@ fn pushes(a: PushesArgs) -> anyhow::Result<()> {
         width: a.size,
         height: a.size,
         backend,
+        furniture_views: a.furniture_views,
         ..DatasetSettings::default()
     };
     let mut data = PushDataset::new(&home, settings).context("setting up the push dataset")?;
+    eprintln!(
+        "{} pieces of articulated furniture for furniture views",
+        data.furniture_count()
+    );
     let mut err = std::io::stderr();
     let summary = data
         .write(&a.out, |p| {

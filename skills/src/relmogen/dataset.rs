@@ -23,7 +23,7 @@ use hearth_sim::scene::{MapOptions, SceneFile, SceneMaps};
 use hearth_sim::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, Frame, Modality, ModalitySet, RenderOptions,
 };
-use hearth_sim::world::{ModelHandle, Snapshot, World, WorldConfig};
+use hearth_sim::world::{JointCommand, LoadedScene, ModelHandle, Snapshot, World, WorldConfig};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -68,6 +68,12 @@ pub struct DatasetSettings {
     pub backend: Backend,
     /// The push.
     pub push: PushSettings,
+    /// Fraction of locations that face a piece of articulated furniture (a cabinet, a
+    /// dresser, a fridge, a door) from about arm's length, with each of its drawers and doors
+    /// opened to a random part of its range with probability ½; the rest are uniform on the
+    /// traversability map. Uniform views rarely have anything within reach that a push can
+    /// move, so they give almost only failures.
+    pub furniture_views: f64,
 }
 
 impl Default for DatasetSettings {
@@ -82,6 +88,7 @@ impl Default for DatasetSettings {
             vfov_deg: 90.0,
             backend: Backend::Auto,
             push: PushSettings::default(),
+            furniture_views: 0.75,
         }
     }
 }
@@ -204,9 +211,62 @@ pub struct PushDataset {
     robot: ModelHandle,
     home: Snapshot,
     cells: Vec<[f64; 2]>,
+    /// Articulated furniture with free joints, for furniture views.
+    furniture: Vec<Furniture>,
+    /// The traversability map (furniture views stand on it).
+    maps: SceneMaps,
     camera: Camera,
     arm: Arm,
     settings: DatasetSettings,
+}
+
+/// A piece of articulated furniture a location can face.
+#[derive(Clone, Debug)]
+struct Furniture {
+    model: ModelHandle,
+    /// Footprint centre and yaw of the object (its front faces +x of that yaw).
+    xy: [f64; 2],
+    yaw: f64,
+    /// Half its depth along its front axis.
+    half_depth: f64,
+    /// Its unactuated joints (variables) with their ranges.
+    joints: Vec<(usize, f64, f64)>,
+}
+
+/// Articulated objects of `scene` whose joints move freely in `world`.
+fn articulated_furniture(world: &World, scene: &SceneFile, loaded: &LoadedScene) -> Vec<Furniture> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        let Some(model) = loaded.object(&object.name) else {
+            continue;
+        };
+        let (Ok(m), Ok(commands)) = (world.model(model), world.joint_commands(model)) else {
+            continue;
+        };
+        let joints: Vec<(usize, f64, f64)> = (0..m.dof())
+            .filter(|&v| commands[v] == JointCommand::Off && m.upper()[v] - m.lower()[v] > 1e-3)
+            .map(|v| (v, m.lower()[v], m.upper()[v]))
+            .collect();
+        if joints.is_empty() {
+            continue;
+        }
+        let (centre, half_depth) = object.bbox.as_ref().map_or(([0.0, 0.0], 0.3), |b| {
+            (
+                [(b.min[0] + b.max[0]) / 2.0, (b.min[1] + b.max[1]) / 2.0],
+                ((b.max[0] - b.min[0]) / 2.0).abs(),
+            )
+        });
+        let pose = object.pose();
+        let c = pose * nalgebra::Point3::new(centre[0], centre[1], 0.0);
+        out.push(Furniture {
+            model,
+            xy: [c.x, c.y],
+            yaw: object.orientation.yaw(),
+            half_depth,
+            joints,
+        });
+    }
+    out
 }
 
 impl std::fmt::Debug for PushDataset {
@@ -279,6 +339,7 @@ impl PushDataset {
         if cells.is_empty() {
             return Err(bad("scene", "has no floor the Fetch fits on"));
         }
+        let furniture = articulated_furniture(&world, &scene, &loaded);
         let camera = Camera::new(
             &world,
             Some(robot),
@@ -296,10 +357,25 @@ impl PushDataset {
             world,
             robot,
             cells,
+            furniture,
+            maps,
             camera,
             arm,
             settings,
         })
+    }
+
+    /// How many pieces of articulated furniture (with free drawers or doors) furniture views
+    /// can face.
+    /// ```no_run
+    /// use hearth_skills::relmogen::{DatasetSettings, PushDataset};
+    /// let home = hearth_sim::scene::SceneFile::load("home.json")?;
+    /// let data = PushDataset::new(&home, DatasetSettings::default())?;
+    /// println!("{} pieces of furniture to face", data.furniture_count());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn furniture_count(&self) -> usize {
+        self.furniture.len()
     }
 
     /// The settings.
@@ -341,11 +417,21 @@ impl PushDataset {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn location(&mut self, index: usize) -> ReLMoGenResult<Location> {
-        let s = &self.settings;
+        let s = self.settings.clone();
         let mut rng = Pcg64Mcg::seed_from_u64(s.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(index as u64));
         self.world.restore(&self.home).map_err(SkillError::from)?;
-        let [x, y] = self.cells[rng.random_range(0..self.cells.len())];
-        let yaw = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let facing = if !self.furniture.is_empty() && rng.random::<f64>() < s.furniture_views {
+            self.face_furniture(&mut rng)?
+        } else {
+            None
+        };
+        let [x, y, yaw] = match facing {
+            Some(pose) => pose,
+            None => {
+                let [x, y] = self.cells[rng.random_range(0..self.cells.len())];
+                [x, y, rng.random_range(-std::f64::consts::PI..std::f64::consts::PI)]
+            }
+        };
         let z = self
             .world
             .base_pose(self.robot)
@@ -392,6 +478,46 @@ impl PushDataset {
             rgb,
             mask,
         })
+    }
+
+    /// A base pose about arm's length in front of a random piece of articulated furniture,
+    /// facing it, on the traversability map; opens each of its joints to a random part of its
+    /// range with probability ½. `None` when no traversable cell is near its front.
+    fn face_furniture(&mut self, rng: &mut Pcg64Mcg) -> ReLMoGenResult<Option<[f64; 3]>> {
+        let f = self.furniture[rng.random_range(0..self.furniture.len())].clone();
+        let (sin, cos) = f.yaw.sin_cos();
+        let reach = f.half_depth + rng.random_range(0.8..1.1);
+        let lateral = rng.random_range(-0.2..0.2);
+        let xy = [
+            f.xy[0] + cos * reach - sin * lateral,
+            f.xy[1] + sin * reach + cos * lateral,
+        ];
+        // The nearest traversable cell within 0.3 m of the wanted spot.
+        let mut best: Option<([f64; 2], f64)> = None;
+        for dy in -6i32..=6 {
+            for dx in -6i32..=6 {
+                let p = [xy[0] + 0.05 * f64::from(dx), xy[1] + 0.05 * f64::from(dy)];
+                let d = (p[0] - xy[0]).hypot(p[1] - xy[1]);
+                if d <= 0.3 && self.maps.is_traversable(p) && best.is_none_or(|(_, b)| d < b) {
+                    best = Some((p, d));
+                }
+            }
+        }
+        let Some((p, _)) = best else { return Ok(None) };
+        let face = (f.xy[1] - p[1]).atan2(f.xy[0] - p[0]) + rng.random_range(-0.15..0.15);
+        let mut q = self.world.joint_positions(f.model).map_err(SkillError::from)?;
+        let model = self.world.model(f.model).map_err(SkillError::from)?;
+        // Solver drift can leave a joint a hair past its limit; the reset wants it inside.
+        for (v, x) in q.iter_mut().enumerate() {
+            *x = x.clamp(model.lower()[v], model.upper()[v]);
+        }
+        for &(v, lo, hi) in &f.joints {
+            if rng.random::<bool>() {
+                q[v] = lo + (hi - lo) * rng.random_range(0.3..1.0);
+            }
+        }
+        self.world.reset_configuration(f.model, &q).map_err(SkillError::from)?;
+        Ok(Some([p[0], p[1], face]))
     }
 
     fn push_at(
