@@ -44,7 +44,12 @@ fn every_example_config_builds_resets_and_steps() {
     let mut names = Vec::new();
     for entry in std::fs::read_dir(configs_dir()).unwrap() {
         let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "toml") {
+        // `relmogen_*.toml` configure the skills crate's planner-in-the-loop env (tested there).
+        let relmogen = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with("relmogen_"));
+        if path.extension().is_some_and(|e| e == "toml") && !relmogen {
             names.push(path);
         }
     }
