@@ -36,6 +36,7 @@ pub mod grasp;
 pub mod navigate;
 pub mod place;
 pub mod push;
+pub mod story;
 
 pub use arm::{Arm, ArmSettings, ArmTarget};
 pub use articulated::{ArticulatedSettings, close, open};
@@ -45,3 +46,4 @@ pub use grasp::{GraspSettings, grasp, release};
 pub use navigate::{NavigateReport, NavigateSettings, Navigator, navigate};
 pub use place::{PlaceSettings, PlaceTarget, place};
 pub use push::{PushSettings, push_at_pixel};
+pub use story::{StoryOptions, StoryReport, run_story};
