@@ -12,7 +12,8 @@
 //! with drawers nearest the sink counter is the one opened (its highest drawer), and a dish
 //! (a cup: every bowl of the asset library is at least 14 cm across, wider than the Fetch's
 //! 94 mm gripper opening) is stood on the worktop next to the sink, the worktop cleared of the
-//! generator's small objects. A home without a kitchen counter or without a cabinet with
+//! generator's small objects; the kitchen's dining table and chairs are cleared away (they
+//! often stand where the robot has to stand). A home without a kitchen counter or without a cabinet with
 //! drawers in its kitchen fails the `setup` stage.
 //!
 //! ```no_run
@@ -33,7 +34,7 @@ use std::time::Instant;
 use hearth_sim::assets::{Asset, Category, RoomType};
 use hearth_sim::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, SceneObject, generate};
 use hearth_sim::sensors::{Camera, CameraConfig, Modality, ModalitySet, Preset};
-use hearth_sim::world::{ModelHandle, World, WorldConfig};
+use hearth_sim::world::{BodyId, ModelHandle, World, WorldConfig};
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
@@ -280,6 +281,17 @@ fn cast(scene: &mut SceneFile) -> SkillResult<Cast> {
     let stand_side = edge + towards * 0.1;
     let p = counter.pose() * Point3::new(x, y, piece.z);
     scene.objects.retain(|o| o.on.as_deref() != Some(counter.name.as_str()));
+    // The kitchen's dining set (table, chairs and what stands on them) is cleared away: it
+    // often stands where the robot has to stand in front of the kitchen run.
+    let dining: Vec<String> = scene
+        .objects
+        .iter()
+        .filter(|o| in_kitchen(o) && matches!(o.category.as_str(), "table" | "chair"))
+        .map(|o| o.name.clone())
+        .collect();
+    scene
+        .objects
+        .retain(|o| !dining.contains(&o.name) && !o.on.as_ref().is_some_and(|s| dining.contains(s)));
     let dish = "story_dish".to_owned();
     let mut mug = SceneObject::new(&dish, "mug", 0, [p.x, p.y, p.z]);
     // Its handle (+y) pointing away from where the robot will stand: a side grasp closes
@@ -544,6 +556,7 @@ fn story_stages(
     let mut rng = Pcg64Mcg::seed_from_u64(options.seed ^ 0x5707_1e5);
     let nav = Navigator::new(NavigateSettings {
         execution: exec,
+        plan_iterations: 60_000,
         ..Default::default()
     })
     .map_err(|_| ())?;
@@ -592,14 +605,20 @@ fn story_stages(
             &mut rng,
         )?;
         r.sample("open_drawer")?;
-        // A little further back from the handle, then the arm in for driving.
+        // A little further back from the handle and up, clear of the drawer (where a straight
+        // step is possible), then the arm in for driving.
         let back = arm.tip_pose(&r.world)?.rotation * -nalgebra::Vector3::x();
-        let back = LinearMove {
-            check_world: false,
-            ..LinearMove::new(back, 0.06)
-        };
-        arm.move_linear(&mut r.world, &back, exec)?;
-        tuck_arm(r, &mut arm, exec, &mut rng)?;
+        for (direction, distance) in [(back, 0.06), (nalgebra::Vector3::z(), 0.06)] {
+            let m = LinearMove {
+                check_world: false,
+                ..LinearMove::new(direction, distance)
+            };
+            match arm.move_linear(&mut r.world, &m, exec) {
+                Ok(_) | Err(SkillError::Unreachable(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        tuck_arm(r, &mut arm, exec, &[], &mut rng)?;
         Ok(((), format!("`{}` from {:.2} to {:.2} m", o.joint, o.start, o.end)))
     })?;
     run.stage("navigate_to_sink", |r| {
@@ -649,7 +668,7 @@ fn story_stages(
                 rest.x, rest.y, rest.z, basin.z
             )));
         }
-        tuck_arm(r, &mut arm, exec, &mut rng)?;
+        tuck_arm(r, &mut arm, exec, &[], &mut rng)?;
         Ok((
             (),
             format!(
@@ -663,13 +682,17 @@ fn story_stages(
 
 /// Spots of the base in front of a cabinet when opening its drawer, in order of preference:
 /// distance from the cabinet's origin and sideways offset, metres.
-const CABINET_STANDS: [(f64, f64); 6] = [
-    (1.3, 0.0),
+const CABINET_STANDS: [(f64, f64); 10] = [
     (1.2, 0.0),
-    (1.4, 0.0),
-    (1.3, 0.12),
-    (1.3, -0.12),
+    (1.3, 0.0),
     (1.1, 0.0),
+    (1.2, 0.15),
+    (1.2, -0.15),
+    (1.0, 0.0),
+    (1.1, 0.25),
+    (1.1, -0.25),
+    (1.0, 0.3),
+    (1.0, -0.3),
 ];
 /// Spots of the base in front of the sink counter when grasping and placing (sideways from
 /// the spot between the dish and the basin).
@@ -706,14 +729,17 @@ fn reachable(
 
 /// Brings the arm back close to the body for driving: above the base, a little ahead, the
 /// gripper keeping its orientation (a held object stays upright).
-fn tuck_arm(run: &mut Run, arm: &mut Arm, exec: Execution, rng: &mut Pcg64Mcg) -> SkillResult<()> {
+fn tuck_arm(run: &mut Run, arm: &mut Arm, exec: Execution, ignore: &[BodyId], rng: &mut Pcg64Mcg) -> SkillResult<()> {
     let base = run.world.base_pose(run.robot)?;
     let tip = arm.tip_pose(&run.world)?;
     let mut last = None;
     for (x, z) in [(0.45, 1.05), (0.5, 1.15), (0.55, 0.95)] {
         let at = base * Point3::new(x, 0.0, z);
         let pose = Isometry3::from_parts(at.coords.into(), tip.rotation);
-        match arm.move_to(&mut run.world, &ArmTarget::Pose(pose), exec, rng) {
+        let moved = arm
+            .plan(&run.world, &ArmTarget::Pose(pose), ignore, rng)
+            .and_then(|plan| arm.execute(&mut run.world, &plan, exec));
+        match moved {
             Ok(_) => {
                 run.sample("carry")?;
                 return Ok(());
