@@ -34,7 +34,7 @@ use std::time::Instant;
 use hearth_sim::assets::{Asset, Category, RoomType};
 use hearth_sim::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, SceneObject, generate};
 use hearth_sim::sensors::{Camera, CameraConfig, Modality, ModalitySet, Preset};
-use hearth_sim::world::{BodyId, ModelHandle, World, WorldConfig};
+use hearth_sim::world::{ModelHandle, World, WorldConfig};
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
@@ -617,36 +617,43 @@ fn story_stages(
         Err(last.unwrap_or_else(|| SkillError::Unreachable("no cabinet".into())))
     })?;
     run.stage("open_drawer", |r| {
-        let o = open(
-            &mut r.world,
-            &mut arm,
-            cabinet,
-            &drawer,
-            options.drawer_opening,
-            &ArticulatedSettings {
-                // Open far enough to reach in: 40 % of the asked pull (10 cm of 25).
-                min_fraction: 0.4,
-                ..Default::default()
-            },
-            exec,
-            &mut rng,
-        )?;
-        r.sample("open_drawer")?;
-        // A little further back from the handle and up, clear of the drawer (where a straight
-        // step is possible), then the arm in for driving.
-        let back = arm.tip_pose(&r.world)?.rotation * -nalgebra::Vector3::x();
-        for (direction, distance) in [(back, 0.06), (nalgebra::Vector3::z(), 0.06)] {
-            let m = LinearMove {
-                check_world: false,
-                ..LinearMove::new(direction, distance)
-            };
-            match arm.move_linear(&mut r.world, &m, exec) {
-                Ok(_) | Err(SkillError::Unreachable(_)) => {}
-                Err(e) => return Err(e),
+        let settings = ArticulatedSettings {
+            // Open far enough to reach in: 40 % of the asked pull (10 cm of 25).
+            min_fraction: 0.4,
+            ..Default::default()
+        };
+        // A second try (new IK seeds and plans) after a miss of the handle or a pull that
+        // did not take; the arm is brought in first.
+        let mut tries = 0;
+        let o = loop {
+            tries += 1;
+            let opened = open(
+                &mut r.world,
+                &mut arm,
+                cabinet,
+                &drawer,
+                options.drawer_opening,
+                &settings,
+                exec,
+                &mut rng,
+            );
+            match opened {
+                Ok(o) => break o,
+                Err(e) if tries >= 2 || !retryable(&e) => return Err(e),
+                Err(_) => {
+                    let _ = r.world.gripper_open(robot);
+                    clear_of(r, &mut arm, exec)?;
+                    tuck_arm(r, &mut arm, exec, cabinet, &mut rng)?;
+                }
             }
-        }
-        tuck_arm(r, &mut arm, exec, &[], &mut rng)?;
-        Ok(((), format!("`{}` from {:.2} to {:.2} m", o.joint, o.start, o.end)))
+        };
+        r.sample("open_drawer")?;
+        clear_of(r, &mut arm, exec)?;
+        tuck_arm(r, &mut arm, exec, cabinet, &mut rng)?;
+        Ok((
+            (),
+            format!("`{}` from {:.2} to {:.2} m ({tries} tries)", o.joint, o.start, o.end),
+        ))
     })?;
     run.stage("navigate_to_sink", |r| {
         let spots = COUNTER_STANDS
@@ -703,7 +710,7 @@ fn story_stages(
                 rest.x, rest.y, rest.z, basin.z
             )));
         }
-        tuck_arm(r, &mut arm, exec, &[], &mut rng)?;
+        tuck_arm(r, &mut arm, exec, counter, &mut rng)?;
         Ok((
             (),
             format!(
@@ -730,8 +737,8 @@ fn story_arm_settings() -> ArmSettings {
 /// Spots of the base in front of a cabinet when opening its drawer, in order of preference:
 /// distance from the cabinet's origin and sideways offset, metres.
 const CABINET_STANDS: [(f64, f64); 10] = [
-    (1.3, 0.0),
     (1.2, 0.0),
+    (1.3, 0.0),
     (1.1, 0.0),
     (1.2, 0.15),
     (1.2, -0.15),
@@ -802,26 +809,59 @@ fn ready_arm(run: &mut Run, arm: &mut Arm, exec: Execution, rng: &mut Pcg64Mcg) 
 
 /// Brings the arm back close to the body for driving: above the base, a little ahead, the
 /// gripper keeping its orientation (a held object stays upright).
-fn tuck_arm(run: &mut Run, arm: &mut Arm, exec: Execution, ignore: &[BodyId], rng: &mut Pcg64Mcg) -> SkillResult<()> {
+fn tuck_arm(run: &mut Run, arm: &mut Arm, exec: Execution, near: ModelHandle, rng: &mut Pcg64Mcg) -> SkillResult<()> {
     let base = run.world.base_pose(run.robot)?;
     let tip = arm.tip_pose(&run.world)?;
     let mut last = None;
-    for (x, z) in [(0.45, 1.05), (0.5, 1.15), (0.55, 0.95)] {
-        let at = base * Point3::new(x, 0.0, z);
-        let pose = Isometry3::from_parts(at.coords.into(), tip.rotation);
-        let moved = arm
-            .plan(&run.world, &ArmTarget::Pose(pose), ignore, rng)
-            .and_then(|plan| arm.execute(&mut run.world, &plan, exec));
-        match moved {
-            Ok(_) => {
-                run.sample("carry")?;
-                return Ok(());
+    // The fingers may still graze the furniture they worked on: if no plan starts clear of
+    // it, the way out may touch it.
+    let near = run.world.model_bodies(near)?;
+    for ignore in [&[][..], &near[..]] {
+        for (x, z) in [(0.45, 1.05), (0.5, 1.15), (0.55, 0.95)] {
+            let at = base * Point3::new(x, 0.0, z);
+            let pose = Isometry3::from_parts(at.coords.into(), tip.rotation);
+            let moved = arm
+                .plan(&run.world, &ArmTarget::Pose(pose), ignore, rng)
+                .and_then(|plan| arm.execute(&mut run.world, &plan, exec));
+            match moved {
+                Ok(_) => {
+                    run.sample("carry")?;
+                    return Ok(());
+                }
+                Err(e) if retryable(&e) => last = Some(e),
+                Err(e) => return Err(e),
             }
-            Err(e @ (SkillError::IkFailed(_) | SkillError::PlanningFailed(_) | SkillError::PlanningTimeout(_))) => {
-                last = Some(e)
-            }
-            Err(e) => return Err(e),
         }
     }
     Err(last.unwrap_or_else(|| SkillError::IkFailed("no carrying pose".into())))
+}
+
+/// Failures another plan may avoid.
+fn retryable(e: &SkillError) -> bool {
+    matches!(
+        e,
+        SkillError::IkFailed(_)
+            | SkillError::PlanningFailed(_)
+            | SkillError::PlanningTimeout(_)
+            | SkillError::Unreachable(_)
+            | SkillError::NotHeld(_)
+            | SkillError::NoEffect(_)
+    )
+}
+
+/// Backs the gripper a little away from what it let go of and lifts it (where a straight step
+/// is possible).
+fn clear_of(run: &mut Run, arm: &mut Arm, exec: Execution) -> SkillResult<()> {
+    let back = arm.tip_pose(&run.world)?.rotation * -nalgebra::Vector3::x();
+    for (direction, distance) in [(back, 0.06), (nalgebra::Vector3::z(), 0.06)] {
+        let m = LinearMove {
+            check_world: false,
+            ..LinearMove::new(direction, distance)
+        };
+        match arm.move_linear(&mut run.world, &m, exec) {
+            Ok(_) | Err(SkillError::Unreachable(_)) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }
