@@ -871,8 +871,8 @@ fn rug_at(b: &mut Builder, r: &RoomPlan, v: usize, p: [f64; 2]) -> Result<(), Sc
     Ok(())
 }
 
-/// The kitchen's main run along the side wall away from the door: fridge, a cabinet, the sink
-/// counter, stove, cabinets, dishwasher, with wall cabinets above the worktop modules.
+/// The kitchen's main run along the side wall away from the door: fridge, a cabinet, stove, the
+/// sink counter, cabinets, dishwasher, with wall cabinets above the worktop modules.
 fn kitchen_run(b: &mut Builder, r: &mut RoomPlan) -> Result<(), SceneError> {
     use Category as C;
     let door_x = r.taken.first().map_or(r.centre()[0], |f| f.c[0]);
@@ -880,8 +880,8 @@ fn kitchen_run(b: &mut Builder, r: &mut RoomPlan) -> Result<(), SceneError> {
     let modules = [
         C::Fridge,
         C::BottomCabinet,
-        C::Counter,
         C::Stove,
+        C::Counter,
         C::BottomCabinet,
         C::Dishwasher,
         C::BottomCabinet,
