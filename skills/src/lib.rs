@@ -15,6 +15,9 @@
 //! push primitive), [`grasp::grasp`] and [`grasp::release`], [`place::place`], and
 //! [`articulated::open`] / [`articulated::close`] for drawers and doors.
 //!
+//! [`story::run_story`] chains them into the scripted mobile-manipulation story of `hearth
+//! demo`: drive to the kitchen, open a drawer, take a cup from the worktop to the sink.
+//!
 //! ```
 //! let locobot = hearth_skills::kinematics::RobotModel::builtin("locobot").unwrap();
 //! assert!(locobot.dof() > 0);

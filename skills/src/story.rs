@@ -13,8 +13,8 @@
 //! (a cup: every bowl of the asset library is at least 14 cm across, wider than the Fetch's
 //! 94 mm gripper opening) is stood on the worktop next to the sink, the worktop cleared of the
 //! generator's small objects; the kitchen's dining table and chairs are cleared away (they
-//! often stand where the robot has to stand). A home without a kitchen counter or without a cabinet with
-//! drawers in its kitchen fails the `setup` stage.
+//! often stand where the robot has to stand). A home without a kitchen counter or without a
+//! cabinet with drawers in its kitchen fails the `setup` stage.
 //!
 //! ```no_run
 //! use hearth_skills::story::{StoryOptions, run_story};
@@ -504,9 +504,10 @@ pub fn run_story_in(mut scene: SceneFile, options: &StoryOptions) -> StoryReport
                 .ok_or_else(|| SkillError::BadInput(format!("`{name}` was not loaded")))
         };
         let handles = (handle(&cast.counter.name)?, handle(&cast.dish)?);
-        Ok((cast, maps, world, robot, handles, loaded.objects.clone()))
+        let arm = Arm::new(&world, robot, story_arm_settings())?;
+        Ok((cast, maps, world, robot, handles, loaded.objects.clone(), arm))
     })();
-    let (cast, maps, world, robot, (counter, dish), objects) = match set_up {
+    let (cast, maps, world, robot, (counter, dish), objects, arm) = match set_up {
         Ok(v) => v,
         Err(e) => return failed_setup(options, e, clock),
     };
@@ -542,7 +543,7 @@ pub fn run_story_in(mut scene: SceneFile, options: &StoryOptions) -> StoryReport
         cast.dish
     );
     let _ = run.stage("setup", |_| Ok(((), detail)));
-    let _ = story_stages(&mut run, &cast, &maps, options, counter, dish);
+    let _ = story_stages(&mut run, arm, &cast, &maps, options, counter, dish);
     run.report.success = run.report.failure.is_none();
     if let Ok(p) = run.world.base_pose(dish) {
         run.report.dish_position = [p.translation.x, p.translation.y, p.translation.z];
@@ -568,6 +569,7 @@ pub fn run_story_in(mut scene: SceneFile, options: &StoryOptions) -> StoryReport
 #[allow(clippy::too_many_arguments)]
 fn story_stages(
     run: &mut Run,
+    mut arm: Arm,
     cast: &Cast,
     maps: &SceneMaps,
     options: &StoryOptions,
@@ -583,13 +585,6 @@ fn story_stages(
     })
     .map_err(|_| ())?;
     let robot = run.robot;
-    let mut arm = run.stage("arm", |r| {
-        Ok((
-            Arm::new(&r.world, robot, story_arm_settings())?,
-            "Fetch arm ready".into(),
-        ))
-    })?;
-    run.report.stages.pop();
 
     let (cabinet, drawer) = run.stage("navigate_to_cabinet", |r| {
         // The first cabinet with a free spot in front of it that a path reaches.

@@ -14,7 +14,7 @@ use hearth_skills::story::{StoryOptions, StoryReport, run_story};
 #[derive(Args, Debug)]
 pub struct DemoArgs {
     /// Seed of the home (the first one with --seeds).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 3)]
     seed: u64,
     /// Run this many homes (seed, seed + 1, …) and report the success rate.
     #[arg(long)]
