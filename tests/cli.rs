@@ -1,5 +1,5 @@
-//! The `hearth` binary end to end: `kin info`, `kin fk`, `kin ik`, `bench kin`, and the errors a
-//! user meets (bad `--q`, unknown robot, missing or malformed URDF), which must exit non-zero
+//! The `hearth` binary end to end: `kin info`, `kin fk`, `kin ik`, `bench kin`, `demo`, and the
+//! errors a user meets (bad `--q`, unknown robot, missing or malformed URDF), which must exit non-zero
 //! with a message and never a panic.
 
 use std::path::PathBuf;
@@ -523,5 +523,34 @@ fn dataset_pushes_writes_locations_and_resumes() {
     );
     let err = fails(&["dataset", "pushes", "--generate", "1", "--locations", "0", "--out", out]);
     assert!(err.contains("locations"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn demo_runs_the_story_and_writes_the_success_rate() {
+    let dir = temp_dir("demo");
+    let path = dir.join("demo.json");
+    let o = hearth(&["demo", "--seeds", "1", "--kinematic", "--json", path.to_str().unwrap()]);
+    assert!(o.status.success(), "demo failed: {}", stderr(&o));
+    assert!(stdout(&o).contains("success rate"), "{}", stdout(&o));
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let runs = report["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 1);
+    assert_eq!(runs[0]["seed"], 3);
+    assert_eq!(runs[0]["success"], true, "{report}");
+    assert_eq!(report["success_rate"], 1.0);
+    // A single run writes its images, report and trajectory.
+    let out = dir.join("one");
+    let o = hearth(&["demo", "--kinematic", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "demo failed: {}", stderr(&o));
+    assert!(stdout(&o).contains("place_in_sink"), "{}", stdout(&o));
+    let trajectory: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("trajectory.json")).unwrap()).unwrap();
+    assert!(trajectory["samples"].as_array().is_some_and(|s| s.len() >= 6));
+    assert!(out.join("report.json").exists());
+    // Bad arguments are clean errors.
+    let err = fails(&["demo", "--rooms", "40"]);
+    assert!(err.contains("--rooms"), "{err}");
+    fails(&["demo", "--seeds", "0"]);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -433,6 +433,13 @@ pub fn move_joint<R: Rng + ?Sized>(
         let commands = world.joint_commands(object)?.to_vec();
         let mut q = world.joint_positions(object)?;
         q[v] = start + travel * m.planned as f64 / m.requested.max(1) as f64;
+        // Joints resting on a limit read back a hair beyond it (float noise of the solver);
+        // such a reading is the limit itself.
+        for x in q.iter_mut() {
+            if x.abs() < 1e-9 {
+                *x = 0.0;
+            }
+        }
         world.reset_configuration(object, &q)?;
         for (k, c) in commands.into_iter().enumerate() {
             world.set_joint_command(object, &model.variable_names()[k], c)?;

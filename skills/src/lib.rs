@@ -15,6 +15,9 @@
 //! push primitive), [`grasp::grasp`] and [`grasp::release`], [`place::place`], and
 //! [`articulated::open`] / [`articulated::close`] for drawers and doors.
 //!
+//! [`story::run_story`] chains them into the scripted mobile-manipulation story of `hearth
+//! demo`: drive to the kitchen, open a drawer, take a cup from the worktop to the sink.
+//!
 //! ```
 //! let locobot = hearth_skills::kinematics::RobotModel::builtin("locobot").unwrap();
 //! assert!(locobot.dof() > 0);
@@ -37,6 +40,7 @@ pub mod navigate;
 pub mod place;
 pub mod push;
 pub mod relmogen;
+pub mod story;
 
 pub use arm::{Arm, ArmSettings, ArmTarget};
 pub use articulated::{ArticulatedSettings, close, open};
@@ -47,3 +51,4 @@ pub use navigate::{NavigateReport, NavigateSettings, Navigator, navigate};
 pub use place::{PlaceSettings, PlaceTarget, place};
 pub use push::{PushSettings, push_at_pixel};
 pub use relmogen::{ReLMoGenConfig, ReLMoGenEnv, ReLMoGenVecEnv};
+pub use story::{StoryOptions, StoryReport, run_story};

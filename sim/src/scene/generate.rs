@@ -871,8 +871,8 @@ fn rug_at(b: &mut Builder, r: &RoomPlan, v: usize, p: [f64; 2]) -> Result<(), Sc
     Ok(())
 }
 
-/// The kitchen's main run along the side wall away from the door: fridge, cabinets, stove,
-/// sink counter, dishwasher, with wall cabinets above the worktop modules.
+/// The kitchen's main run along the side wall away from the door: fridge, a cabinet, stove, the
+/// sink counter, cabinets, dishwasher, with wall cabinets above the worktop modules.
 fn kitchen_run(b: &mut Builder, r: &mut RoomPlan) -> Result<(), SceneError> {
     use Category as C;
     let door_x = r.taken.first().map_or(r.centre()[0], |f| f.c[0]);
@@ -881,8 +881,8 @@ fn kitchen_run(b: &mut Builder, r: &mut RoomPlan) -> Result<(), SceneError> {
         C::Fridge,
         C::BottomCabinet,
         C::Stove,
-        C::BottomCabinet,
         C::Counter,
+        C::BottomCabinet,
         C::Dishwasher,
         C::BottomCabinet,
         C::BottomCabinet,
@@ -893,17 +893,30 @@ fn kitchen_run(b: &mut Builder, r: &mut RoomPlan) -> Result<(), SceneError> {
     let mut cursor = if from_hi { hi } else { lo };
     for c in modules {
         let v = b.rng.random_range(0..c.variants());
-        let a = b.asset(c, v)?;
-        // The module's extent along the wall is its own y extent (the walls run along world y).
-        let width = a.aabb_max.y - a.aabb_min.y;
-        // Modules stand side by side, just over the placement clearance apart; one that does not
-        // fit is skipped and the next, maybe narrower, is tried.
-        let step = width / 2.0 + GAP + 0.005;
-        let along = if from_hi { cursor - step } else { cursor + step };
-        if along - width / 2.0 < lo - 1e-9 || along + width / 2.0 > hi + 1e-9 {
-            continue;
+        // Every kitchen gets its sink: a counter that does not fit is tried again in its other
+        // variants (without drawing), before the module is given up.
+        let mut variants = vec![v];
+        if c == C::Counter {
+            variants.extend((0..c.variants()).filter(|&o| o != v));
         }
-        let Some(i) = b.on_wall_at(r, &a, side, along) else {
+        let mut placed_at = None;
+        for v in variants {
+            let a = b.asset(c, v)?;
+            // The module's extent along the wall is its own y extent (the walls run along world y).
+            let width = a.aabb_max.y - a.aabb_min.y;
+            // Modules stand side by side, just over the placement clearance apart; one that does
+            // not fit is skipped and the next, maybe narrower, is tried.
+            let step = width / 2.0 + GAP + 0.005;
+            let along = if from_hi { cursor - step } else { cursor + step };
+            if along - width / 2.0 < lo - 1e-9 || along + width / 2.0 > hi + 1e-9 {
+                continue;
+            }
+            if let Some(i) = b.on_wall_at(r, &a, side, along) {
+                placed_at = Some((i, a, width));
+                break;
+            }
+        }
+        let Some((i, a, width)) = placed_at else {
             continue;
         };
         let placed = print_of(
