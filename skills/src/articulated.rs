@@ -12,9 +12,10 @@
 //! With [`Execution::Kinematic`] the arm's joints are set along the motion and the furniture
 //! joint is set to follow the tip's progress at its end (teleported fingers drag nothing).
 //!
-//! Articulated objects spawned in a [`World`] hold their joints with position motors unless
-//! told otherwise (`World::set_joint_command(.., JointCommand::Off)` makes them passive); a
-//! held joint resists the robot and the skill reports [`SkillError::NoEffect`].
+//! Furniture loaded with a scene has its drawers and vertical-hinge doors unactuated (free,
+//! with their damping and friction). A model spawned on its own holds its joints with position
+//! motors until `World::set_joint_command(.., JointCommand::Off)` frees them; a held joint
+//! resists the robot and the skill reports [`SkillError::NoEffect`].
 
 use hearth_kinematics::parry3d::shape::SharedShape;
 use hearth_kinematics::{JointKind, to_pose};
