@@ -16,7 +16,16 @@ pub struct BatchedObs {
 }
 
 impl BatchedObs {
-    fn from(obs: &[Obs]) -> Self {
+    /// Stacks the observations of several envs (same spaces, env-major), as [`VecEnv`] returns
+    /// them; other vectorised envs use it too.
+    ///
+    /// ```
+    /// use hearth_sim::env::{BatchedObs, Obs, ObsData};
+    /// let one = |x: f32| Obs { entries: vec![("task_obs".into(), ObsData::F32(vec![x, x]))] };
+    /// let b = BatchedObs::stack(&[one(1.0), one(2.0)]);
+    /// assert_eq!(b.get("task_obs"), Some(&ObsData::F32(vec![1.0, 1.0, 2.0, 2.0])));
+    /// ```
+    pub fn stack(obs: &[Obs]) -> Self {
         let Some(first) = obs.first() else {
             return Self::default();
         };
@@ -141,7 +150,7 @@ impl VecEnv {
             .zip(seeds)
             .map(|(env, s)| env.reset(s).map(|(o, _)| o))
             .collect::<EnvResult<Vec<_>>>()?;
-        Ok(BatchedObs::from(&obs))
+        Ok(BatchedObs::stack(&obs))
     }
 
     /// Steps every env with its slice of `actions` (the action space's size per env,
@@ -203,7 +212,7 @@ impl VecEnv {
             out.infos.push(step.info);
             obs.push(step.obs);
         }
-        out.obs = BatchedObs::from(&obs);
+        out.obs = BatchedObs::stack(&obs);
         Ok(out)
     }
 }

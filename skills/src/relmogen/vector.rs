@@ -1,6 +1,6 @@
 //! [`ReLMoGenVecEnv`]: N ReLMoGen envs stepped in parallel with auto-reset.
 
-use hearth_sim::env::{BatchedObs, Obs, ObsData};
+use hearth_sim::env::BatchedObs;
 use rayon::prelude::*;
 
 use super::config::{ReLMoGenConfig, ReLMoGenError, ReLMoGenResult, bad};
@@ -26,36 +26,6 @@ pub struct ReLMoGenVecStep {
     pub truncated: Vec<bool>,
     /// Per env: the step's info (for an env that ended, its finished episode's).
     pub infos: Vec<ReLMoGenInfo>,
-}
-
-/// Batches observations per name, env-major.
-fn batch(obs: &[Obs]) -> BatchedObs {
-    let Some(first) = obs.first() else {
-        return BatchedObs::default();
-    };
-    let entries = first
-        .entries
-        .iter()
-        .enumerate()
-        .map(|(k, (name, data))| {
-            let n = data.len() * obs.len();
-            let mut all = match data {
-                ObsData::F32(_) => ObsData::F32(Vec::with_capacity(n)),
-                ObsData::U8(_) => ObsData::U8(Vec::with_capacity(n)),
-                ObsData::U32(_) => ObsData::U32(Vec::with_capacity(n)),
-            };
-            for o in obs {
-                match (&mut all, &o.entries[k].1) {
-                    (ObsData::F32(a), ObsData::F32(b)) => a.extend_from_slice(b),
-                    (ObsData::U8(a), ObsData::U8(b)) => a.extend_from_slice(b),
-                    (ObsData::U32(a), ObsData::U32(b)) => a.extend_from_slice(b),
-                    _ => {}
-                }
-            }
-            (name.clone(), all)
-        })
-        .collect();
-    BatchedObs { entries }
 }
 
 /// N [`ReLMoGenEnv`]s of one configuration, stepped on rayon's threads; an env whose episode
@@ -170,7 +140,7 @@ impl ReLMoGenVecEnv {
             .zip(seeds)
             .map(|(env, s)| env.reset(s).map(|(o, _)| o))
             .collect::<ReLMoGenResult<Vec<_>>>()?;
-        Ok(batch(&obs))
+        Ok(BatchedObs::stack(&obs))
     }
 
     /// Steps every env with its slice of `actions` (the action space's size per env,
@@ -237,7 +207,7 @@ impl ReLMoGenVecEnv {
             out.infos.push(step.info);
             obs.push(step.obs);
         }
-        out.obs = batch(&obs);
+        out.obs = BatchedObs::stack(&obs);
         Ok(out)
     }
 }
