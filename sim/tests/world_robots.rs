@@ -114,6 +114,60 @@ fn drawer_respects_its_limits_when_pushed() {
     assert!(world.joint_velocities(h).unwrap()[0].abs() < 0.05);
 }
 
+/// The Fetch with its arm stretched out level in front of the base, held for 2 s.
+fn fetch_arm_out(compensate: bool) -> (World, ModelHandle, Vec<f64>) {
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let mut world = world();
+    let h = world
+        .spawn_model(&fetch, &Isometry3::identity(), SpawnOptions::free())
+        .unwrap();
+    world.set_gravity_compensation(h, compensate).unwrap();
+    let mut q = world.joint_positions(h).unwrap();
+    let names = fetch.variable_names().to_vec();
+    q[names.iter().position(|n| n == "torso_lift_joint").unwrap()] = 0.3;
+    for joint in ARM {
+        q[names.iter().position(|n| n == joint).unwrap()] = 0.0;
+    }
+    world.set_position_targets(h, &q).unwrap();
+    steps(&mut world, 60);
+    (world, h, q)
+}
+
+#[test]
+fn gravity_compensation_holds_an_outstretched_arm_on_target() {
+    // How far the gripper is from where the targets put it, over the base as it stands.
+    let tip_error = |world: &World, h: ModelHandle, q: &[f64]| {
+        let model = world.model(h).unwrap().clone();
+        let mut poses = model.pose_buffer();
+        model.fk_from(&world.base_pose(h).unwrap(), q, &mut poses).unwrap();
+        let want = poses[model.link_index("gripper_link").unwrap()].translation.vector;
+        let got = world.link_pose(h, "gripper_link").unwrap().translation.vector;
+        (want - got).norm()
+    };
+    let (world, h, q) = fetch_arm_out(true);
+    let held = tip_error(&world, h, &q);
+    let (plain_world, plain, _) = fetch_arm_out(false);
+    let sagged = tip_error(&plain_world, plain, &q);
+    assert!(held < 3e-3, "the gripper is {held} m off its target with compensation");
+    assert!(
+        sagged > 3.0 * held,
+        "without compensation the arm sags more: {sagged} vs {held} m"
+    );
+    // The wheels carry the base and the casters keep it level under the outstretched arm.
+    let (roll, pitch, _) = world.base_pose(h).unwrap().rotation.euler_angles();
+    assert!(roll.abs() < 0.01 && pitch.abs() < 0.01, "base tilts by {roll}, {pitch}");
+}
+
+const ARM: [&str; 7] = [
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "upperarm_roll_joint",
+    "elbow_flex_joint",
+    "forearm_roll_joint",
+    "wrist_flex_joint",
+    "wrist_roll_joint",
+];
+
 fn drive_straight(robot: &str, v: f64, seconds: f64) -> (World, ModelHandle) {
     let model = RobotModel::builtin(robot).unwrap();
     let mut world = world();

@@ -586,7 +586,7 @@ fn story_stages(
     .map_err(|_| ())?;
     let robot = run.robot;
 
-    let (cabinet, drawer) = run.stage("navigate_to_cabinet", |r| {
+    let (cabinet, drawer, cabinet_object, first_stand) = run.stage("navigate_to_cabinet", |r| {
         // The first cabinet with a free spot in front of it that a path reaches.
         let mut last = None;
         for (o, drawer) in &cast.cabinets {
@@ -599,7 +599,7 @@ fn story_stages(
                     r.report.cabinet = o.name.clone();
                     r.report.drawer = drawer.clone();
                     return Ok((
-                        (handle, drawer.clone()),
+                        (handle, drawer.clone(), o, goal),
                         format!(
                             "to `{}`: {:.2} m, {} replans, {:.2} m from the goal",
                             o.name, n.distance, n.replans, n.position_error
@@ -618,8 +618,10 @@ fn story_stages(
             ..Default::default()
         };
         // A second try (new IK seeds and plans) after a miss of the handle or a pull that
-        // did not take; the arm is brought in first.
+        // did not take, the arm brought in first; after two misses from one spot, or a
+        // collision, the same from another spot in front of the cabinet.
         let mut tries = 0;
+        let mut stands = vec![first_stand];
         let o = loop {
             tries += 1;
             let opened = open(
@@ -634,30 +636,52 @@ fn story_stages(
             );
             match opened {
                 Ok(o) => break o,
-                Err(e) if tries >= 2 || !retryable(&e) => return Err(e),
-                Err(_) => {
+                Err(e) if !retryable(&e) && !matches!(e, SkillError::Collision(_)) => return Err(e),
+                Err(e) => {
                     let _ = r.world.gripper_open(robot);
-                    clear_of(r, &mut arm, exec)?;
-                    tuck_arm(r, &mut arm, exec, cabinet, &mut rng)?;
+                    if tries % 2 == 1 && retryable(&e) {
+                        let recovered =
+                            clear_of(r, &mut arm, exec).and_then(|_| tuck_arm(r, &mut arm, exec, cabinet, &mut rng));
+                        if recovered.is_ok() {
+                            continue;
+                        }
+                    }
+                    if stands.len() >= MAX_STANDS {
+                        return Err(e);
+                    }
+                    let spots = CABINET_STANDS
+                        .iter()
+                        .map(|&(d, side)| in_front_of(cabinet_object, d, side));
+                    let goal =
+                        restand(r, &nav, &mut arm, exec, maps, spots, &stands, cabinet, &mut rng).map_err(|_| e)?;
+                    stands.push(goal);
+                    tries = 0;
                 }
             }
         };
         r.sample("open_drawer")?;
-        clear_of(r, &mut arm, exec)?;
-        tuck_arm(r, &mut arm, exec, cabinet, &mut rng)?;
+        stow(r, &mut arm, exec, cabinet, &mut rng)?;
         Ok((
             (),
-            format!("`{}` from {:.2} to {:.2} m ({tries} tries)", o.joint, o.start, o.end),
+            format!(
+                "`{}` from {:.2} to {:.2} m (from spot {} of the cabinet)",
+                o.joint,
+                o.start,
+                o.end,
+                stands.len()
+            ),
         ))
     })?;
-    run.stage("navigate_to_sink", |r| {
-        let spots = COUNTER_STANDS
+    let counter_spots = || {
+        COUNTER_STANDS
             .iter()
-            .map(|&(d, side)| in_front_of(&cast.counter, d, cast.stand_side + side));
-        let goal = reachable(&nav, r, maps, spots, &mut rng)?;
+            .map(|&(d, side)| in_front_of(&cast.counter, d, cast.stand_side + side))
+    };
+    let sink_stand = run.stage("navigate_to_sink", |r| {
+        let goal = reachable(&nav, r, maps, counter_spots(), &mut rng)?;
         let n = nav.navigate(&mut r.world, robot, maps, goal, &mut rng)?;
         Ok((
-            (),
+            goal,
             format!(
                 "{:.2} m, {} replans, {:.2} m from the goal",
                 n.distance, n.replans, n.position_error
@@ -684,14 +708,41 @@ fn story_stages(
             .filter(|t| t.z > 0.3 && t.z < worktop - 0.1)
             .min_by(|a, b| a.z.total_cmp(&b.z))
             .ok_or_else(|| SkillError::Unreachable(format!("no sink basin in `{}`", cast.counter.name)))?;
-        let p = place(
-            &mut r.world,
-            &mut arm,
-            &basin,
-            &PlaceSettings::default(),
-            exec,
-            &mut rng,
-        )?;
+        // Set down on the basin's floor, or failing that let go 8 cm above it (the cup drops
+        // into the basin); no placement within reach from here: the same from another spot.
+        let mut stands = vec![sink_stand];
+        let mut drop = false;
+        let p = loop {
+            let settings = PlaceSettings {
+                clearance: if drop { 0.08 } else { 0.01 },
+                ..PlaceSettings::default()
+            };
+            match place(&mut r.world, &mut arm, &basin, &settings, exec, &mut rng) {
+                Ok(p) => break p,
+                Err(SkillError::Unreachable(_) | SkillError::IkFailed(_) | SkillError::PlanningFailed(_)) if !drop => {
+                    drop = true;
+                }
+                Err(e @ (SkillError::Unreachable(_) | SkillError::IkFailed(_) | SkillError::PlanningFailed(_)))
+                    if stands.len() < MAX_STANDS =>
+                {
+                    let goal = restand(
+                        r,
+                        &nav,
+                        &mut arm,
+                        exec,
+                        maps,
+                        counter_spots(),
+                        &stands,
+                        counter,
+                        &mut rng,
+                    )
+                    .map_err(|_| e)?;
+                    stands.push(goal);
+                    drop = false;
+                }
+                Err(e) => return Err(e),
+            }
+        };
         r.sample("place_in_sink")?;
         let rest = r.world.base_pose(dish)?.translation;
         let inside = rest.x >= basin.min[0] - 0.02
@@ -717,9 +768,9 @@ fn story_stages(
     Ok(())
 }
 
-/// The Fetch's arm settings for the story: slower motions and a wider margin (the wheeled
-/// base rocks a little under the moving arm, so the arm ends up centimetres off its plan), and
-/// a brush of up to 20 N against furniture tolerated.
+/// The Fetch's arm settings for the story: slower motions and a wider margin (the base tilts
+/// by up to 0.006 rad on its casters under the moving arm, so the arm ends up millimetres off
+/// its plan until the final correction), and a brush of up to 20 N against furniture tolerated.
 fn story_arm_settings() -> ArmSettings {
     ArmSettings {
         velocity_scale: 0.3,
@@ -758,6 +809,58 @@ const COUNTER_STANDS: [(f64, f64); 10] = [
     (0.95, 0.0),
 ];
 
+/// Spots a manipulation is tried from before the story gives up on it.
+const MAX_STANDS: usize = 2;
+
+/// Brings the arm in (backing the base off 10 cm first when the arm is caught on something)
+/// and drives to the first of `spots` a path reaches that is not near one of `tried`.
+#[allow(clippy::too_many_arguments)]
+fn restand(
+    run: &mut Run,
+    nav: &Navigator,
+    arm: &mut Arm,
+    exec: Execution,
+    maps: &SceneMaps,
+    spots: impl Iterator<Item = [f64; 3]>,
+    tried: &[[f64; 3]],
+    near: ModelHandle,
+    rng: &mut Pcg64Mcg,
+) -> SkillResult<[f64; 3]> {
+    stow(run, arm, exec, near, rng)?;
+    let fresh = spots.filter(|g| tried.iter().all(|t| (t[0] - g[0]).hypot(t[1] - g[1]) > 0.1));
+    // What the gripper holds travels with the base: no obstacle to it.
+    let nav = Navigator::new(NavigateSettings {
+        carried: arm.held().map(|h| h.bodies.clone()).unwrap_or_default(),
+        ..nav.settings().clone()
+    })?;
+    let goal = reachable(&nav, run, maps, fresh, rng)?;
+    nav.navigate(&mut run.world, run.robot, maps, goal, rng)?;
+    run.come_to_rest(exec)?;
+    Ok(goal)
+}
+
+/// Backs the gripper off what it touched and brings the arm in; when the arm is caught (a
+/// brush against furniture, a plan that cannot start), once more, then once more after
+/// backing the base off 10 cm.
+fn stow(run: &mut Run, arm: &mut Arm, exec: Execution, near: ModelHandle, rng: &mut Pcg64Mcg) -> SkillResult<()> {
+    let mut last = None;
+    for attempt in 0..3 {
+        if attempt == 2 {
+            run.world.drive(run.robot, -0.1, 0.0)?;
+            let dt = run.world.config().control_dt();
+            for _ in 0..(1.0 / dt).ceil() as usize {
+                run.world.step();
+            }
+            run.come_to_rest(exec)?;
+        }
+        match clear_of(run, arm, exec).and_then(|_| tuck_arm(run, arm, exec, near, rng)) {
+            Ok(()) => return Ok(()),
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| SkillError::NotFinished("the arm could not be brought in".into())))
+}
+
 /// The first of `spots` a path reaches (planned, not driven).
 fn reachable(
     nav: &Navigator,
@@ -776,10 +879,10 @@ fn reachable(
     Err(last.unwrap_or_else(|| SkillError::Unreachable("no spot to stand on".into())))
 }
 
-/// Reaches forward before planning a manipulation: the base rocks on its wheels by a few
-/// hundredths of a radian as the arm's weight moves forward, which would throw a plan made
-/// with the arm tucked off by centimetres at the gripper. With the arm already forward (and
-/// the base come to rest), the plans start from the pitch they will keep.
+/// Reaches forward before planning a manipulation: the base tilts on its casters by a few
+/// thousandths of a radian as the arm's weight moves forward, which would throw a plan made
+/// with the arm tucked off by millimetres at the gripper. With the arm already forward (and
+/// the base come to rest), the plans start from the tilt they will keep.
 fn ready_arm(run: &mut Run, arm: &mut Arm, exec: Execution, rng: &mut Pcg64Mcg) -> SkillResult<()> {
     let base = run.world.base_pose(run.robot)?;
     let yaw = base.rotation.euler_angles().2;

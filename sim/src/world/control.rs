@@ -132,14 +132,29 @@ pub struct DiffDriveConfig {
     pub wheel_radius: f64,
     /// Distance between the wheel contact points in m.
     pub axle_width: f64,
+    /// Links that stand for free-swivelling casters: their contacts carry no friction, so they
+    /// hold the base level without resisting its motion in any direction.
+    pub casters: Vec<String>,
 }
 
 impl DiffDriveConfig {
     /// The parameters of a built-in robot (`fetch`, `locobot`, `turtlebot`).
     pub fn for_builtin(robot: &str) -> Option<Self> {
-        let (l, r, radius, width) = match robot {
-            "fetch" => ("l_wheel_joint", "r_wheel_joint", 0.06433, 0.37476),
-            "locobot" | "turtlebot" => ("wheel_left_joint", "wheel_right_joint", 0.0392, 0.23),
+        let (l, r, radius, width, casters): (_, _, _, _, &[&str]) = match robot {
+            "fetch" => (
+                "l_wheel_joint",
+                "r_wheel_joint",
+                0.06433,
+                0.37476,
+                &["fl_caster_link", "fr_caster_link", "bl_caster_link", "br_caster_link"],
+            ),
+            "locobot" | "turtlebot" => (
+                "wheel_left_joint",
+                "wheel_right_joint",
+                0.0392,
+                0.23,
+                &["caster_front_link", "caster_back_link"],
+            ),
             _ => return None,
         };
         Some(Self {
@@ -147,6 +162,7 @@ impl DiffDriveConfig {
             right_joint: r.to_owned(),
             wheel_radius: radius,
             axle_width: width,
+            casters: casters.iter().map(|c| (*c).to_owned()).collect(),
         })
     }
 
@@ -177,8 +193,16 @@ impl DiffDriveConfig {
         };
         let (left, left_sign) = resolve(&self.left_joint)?;
         let (right, right_sign) = resolve(&self.right_joint)?;
+        let mut casters = Vec::with_capacity(self.casters.len());
+        for link in &self.casters {
+            casters.push(model.link_index(link).map_err(|_| WorldError::UnknownLink {
+                model: name.to_owned(),
+                link: link.clone(),
+            })?);
+        }
         Ok(DiffDrive {
             config: self,
+            casters,
             left,
             right,
             left_sign,
@@ -191,6 +215,8 @@ impl DiffDriveConfig {
 #[derive(Clone, Debug)]
 pub(crate) struct DiffDrive {
     pub(crate) config: DiffDriveConfig,
+    /// Link indices of the casters.
+    pub(crate) casters: Vec<usize>,
     pub(crate) left: usize,
     pub(crate) right: usize,
     pub(crate) left_sign: f64,
@@ -204,6 +230,9 @@ pub(crate) enum BaseDrive {
 }
 
 /// A parallel gripper: finger joints with their open and closed positions.
+///
+/// The colliders of the finger links (the leaders' and their mimics') are rubber pads:
+/// friction [`FINGER_PAD_FRICTION`] against whatever they touch.
 ///
 /// ```
 /// let g = hearth_sim::world::GripperConfig::for_builtin("panda").unwrap();
@@ -219,6 +248,14 @@ pub struct GripperConfig {
     /// Closed position per joint.
     pub closed: Vec<f64>,
 }
+
+/// Friction coefficient of gripper finger pads (rubber on wood, metal or ceramic is about
+/// 0.8–1.2); it wins over the other surface's coefficient in a contact.
+///
+/// ```
+/// assert!(hearth_sim::world::FINGER_PAD_FRICTION >= 1.0);
+/// ```
+pub const FINGER_PAD_FRICTION: f64 = 1.0;
 
 impl GripperConfig {
     /// The gripper of a built-in robot (`panda`, `fetch`, `locobot`).
@@ -273,6 +310,55 @@ pub(crate) struct Gripper {
 }
 
 impl World {
+    /// Whether the position controllers of a model add a gravity feed-forward: each physics
+    /// step, every position target is offset by the joint's gravity load (from the links
+    /// beyond it) divided by its stiffness, so the joint settles on the target instead of
+    /// sagging below it. On for spawned models; off for the objects of a loaded scene.
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// assert!(world.gravity_compensation(arm)?);
+    /// world.set_gravity_compensation(arm, false)?;
+    /// assert!(!world.gravity_compensation(arm)?);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn gravity_compensation(&self, handle: ModelHandle) -> WorldResult<bool> {
+        Ok(self.entry(handle)?.gravity_compensation)
+    }
+
+    /// Turns the gravity feed-forward of a model's position controllers on or off (see
+    /// [`World::gravity_compensation`]). Turning it off restores the plain targets.
+    ///
+    /// # Errors
+    /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::identity(), SpawnOptions::free())?;
+    /// world.set_gravity_compensation(robot, false)?;
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn set_gravity_compensation(&mut self, handle: ModelHandle, on: bool) -> WorldResult<()> {
+        self.entry(handle)?;
+        self.state.models[handle.index()].gravity_compensation = on;
+        if !on {
+            for v in 0..self.state.models[handle.index()].commands.len() {
+                self.write_motor(handle, v);
+            }
+        }
+        Ok(())
+    }
+
     /// Position targets for every joint (`q` order), held by PD motors.
     ///
     /// # Errors
@@ -592,8 +678,30 @@ impl World {
         self.wake(slot.body);
     }
 
-    /// Per physics step: effort joints and holonomic bases.
+    /// Sets the target of variable `v`'s position motor of model `i` (gains unchanged).
+    fn write_motor_target(&mut self, i: usize, v: usize, target: f64) {
+        let entry = &self.state.models[i];
+        let Some(slot) = entry.slot(v) else { return };
+        let g = entry.gains[v];
+        let Some(mb) = self.multibody_of_mut(ModelHandle::from_index(i)) else {
+            return;
+        };
+        if let Some(link) = mb.link_mut(slot.link_id) {
+            link.joint.data.set_motor(
+                slot.joint_axis(),
+                target as Real,
+                0.0,
+                g.stiffness as Real,
+                g.damping as Real,
+            );
+        }
+    }
+
+    /// Per physics step: gravity compensation, effort joints and holonomic bases.
     pub(crate) fn apply_controllers(&mut self) {
+        for i in 0..self.state.models.len() {
+            self.compensate_gravity(i);
+        }
         let s = &mut self.state;
         for entry in &s.models {
             if entry.has_effort {
@@ -615,6 +723,82 @@ impl World {
                 rb.set_angvel(Vector::new(0.0, 0.0, omega as Real), true);
             }
         }
+    }
+}
+
+impl World {
+    /// Shifts the position targets of model `i` by the gravity load on each joint divided by
+    /// its stiffness, so that a position-controlled joint settles on its target instead of
+    /// sagging below it (real arm controllers add the same feed-forward term). The load is
+    /// that of the links beyond the joint, from the bodies' masses and centres of mass now.
+    fn compensate_gravity(&mut self, i: usize) {
+        let entry = &self.state.models[i];
+        if !entry.gravity_compensation
+            || !entry
+                .commands
+                .iter()
+                .any(|c| matches!(c, JointCommand::Position { .. }))
+        {
+            return;
+        }
+        let g = self.gravity;
+        let Some(link) = self.state.multibody_joints.rigid_body_link(entry.root).copied() else {
+            return;
+        };
+        let Some(mb) = self.state.multibody_joints.get_multibody(link.multibody) else {
+            return;
+        };
+        // Mass and first moment of each link's subtree: links come parents first.
+        let scratch = &mut self.gravity_scratch;
+        scratch.clear();
+        for l in mb.links() {
+            let (m, mc) = self
+                .state
+                .bodies
+                .get(l.rigid_body_handle())
+                .map_or((0.0, Vector::ZERO), |rb| (rb.mass(), rb.center_of_mass() * rb.mass()));
+            scratch.push((m, mc));
+        }
+        for l in (0..mb.num_links()).rev() {
+            if let Some(p) = mb.link(l).and_then(|k| k.parent_id()) {
+                let (m, mc) = scratch[l];
+                scratch[p].0 += m;
+                scratch[p].1 += mc;
+            }
+        }
+        let entry = &self.state.models[i];
+        let offsets = &mut self.gravity_offsets;
+        offsets.clear();
+        for (v, command) in entry.commands.iter().enumerate() {
+            let (JointCommand::Position { target }, Some(slot)) = (command, entry.slot(v)) else {
+                continue;
+            };
+            let (Some(child), Some(mlink)) = (self.state.bodies.get(slot.body), mb.link(slot.link_id)) else {
+                continue;
+            };
+            let stiffness = entry.gains[v].stiffness;
+            if !(stiffness > 0.0) {
+                continue;
+            }
+            let axis = *child.rotation() * slot.local_axis;
+            let (m, mc) = scratch[slot.link_id];
+            let load = if slot.axis == 0 {
+                m * g.dot(axis)
+            } else {
+                let anchor = child
+                    .position()
+                    .transform_point(mlink.joint.data.local_frame2.translation);
+                axis.dot((mc - anchor * m).cross(g))
+            };
+            // A target beyond a limit would only press the joint into its stop.
+            let (lo, hi) = (entry.model.lower()[v], entry.model.upper()[v]);
+            offsets.push((v, (target - f64::from(load) / stiffness).clamp(lo, hi)));
+        }
+        let offsets = std::mem::take(&mut self.gravity_offsets);
+        for &(v, target) in &offsets {
+            self.write_motor_target(i, v, target);
+        }
+        self.gravity_offsets = offsets;
     }
 }
 

@@ -59,7 +59,7 @@ mod snapshot;
 mod spawn;
 
 pub use config::WorldConfig;
-pub use control::{DiffDriveConfig, GripperConfig, JointCommand, JointGains};
+pub use control::{DiffDriveConfig, FINGER_PAD_FRICTION, GripperConfig, JointCommand, JointGains};
 pub use error::{WorldError, WorldResult};
 pub use obstacles::WorldObstacles;
 pub use physics::{BodyId, StaticVisual, World};

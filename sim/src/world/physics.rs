@@ -116,6 +116,10 @@ pub struct World {
     pub(crate) gravity: Vector,
     pub(crate) pipeline: PhysicsPipeline,
     pub(crate) state: State,
+    /// Per multibody link: subtree mass and first moment (gravity compensation scratch).
+    pub(crate) gravity_scratch: Vec<(Real, Vector)>,
+    /// Per position-controlled variable: its compensated target (scratch).
+    pub(crate) gravity_offsets: Vec<(usize, f64)>,
 }
 
 impl std::fmt::Debug for World {
@@ -145,6 +149,8 @@ impl World {
             params,
             gravity: Vector::new(g[0] as Real, g[1] as Real, g[2] as Real),
             pipeline: PhysicsPipeline::new(),
+            gravity_scratch: Vec::new(),
+            gravity_offsets: Vec::new(),
             state: State {
                 bodies: Arc::new(RigidBodySet::new()),
                 colliders: Arc::new(ColliderSet::new()),

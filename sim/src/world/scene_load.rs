@@ -260,6 +260,9 @@ impl World {
                             name: object.name.clone(),
                             source,
                         })?;
+                // Furniture joints that are held are held firmly enough; skipping the per-step
+                // gravity pass keeps homes with hundreds of objects fast.
+                self.state.models[handle.index()].gravity_compensation = false;
                 self.free_passive_joints(handle);
                 loaded.objects.insert(object.name.clone(), handle);
             }

@@ -11,7 +11,8 @@ use parry3d::math::Matrix;
 use rapier3d::prelude::*;
 
 use super::control::{
-    BaseDrive, DiffDrive, DiffDriveConfig, Gripper, GripperConfig, JointCommand, JointGains, default_gains,
+    BaseDrive, DiffDrive, DiffDriveConfig, FINGER_PAD_FRICTION, Gripper, GripperConfig, JointCommand, JointGains,
+    default_gains,
 };
 use super::error::{WorldError, WorldResult, check_len};
 use super::physics::{BodyId, World, check_pose};
@@ -147,6 +148,8 @@ pub(crate) struct ModelEntry {
     pub(crate) gripper: Option<Gripper>,
     /// Whether any variable is in effort mode (forces must be re-applied every step).
     pub(crate) has_effort: bool,
+    /// Whether position targets are offset by the joints' gravity load each physics step.
+    pub(crate) gravity_compensation: bool,
 }
 
 impl ModelEntry {
@@ -272,6 +275,23 @@ impl World {
             }
         }
 
+        // Finger links: children of the gripper's joints and of the joints that mimic them.
+        let finger_links: Vec<usize> = gripper.as_ref().map_or_else(Vec::new, |g| {
+            let leaders: Vec<usize> = model
+                .joints()
+                .iter()
+                .enumerate()
+                .filter(|(_, j)| j.variable.is_some_and(|v| g.vars.contains(&v)))
+                .map(|(i, _)| i)
+                .collect();
+            model
+                .joints()
+                .iter()
+                .enumerate()
+                .filter(|(i, j)| leaders.contains(i) || j.mimic.as_ref().is_some_and(|m| leaders.contains(&m.joint)))
+                .map(|(_, j)| j.child)
+                .collect()
+        });
         let sleeping = self.config.sleeping;
         let mut body_handles = Vec::with_capacity(group_heads.len());
         for (g, &head) in group_heads.iter().enumerate() {
@@ -286,12 +306,20 @@ impl World {
                 // One collider per link: the model's merged link shape (a compound when the link
                 // has several collision elements), which keeps the broad phase small.
                 if let Some(shape) = model.link_shape(l) {
-                    colliders.push(
-                        ColliderBuilder::new(shape.shape.clone())
-                            .position(to_pose(&(offset * shape.origin)))
-                            .density(link_density as Real)
-                            .friction(friction as Real),
-                    );
+                    let builder = ColliderBuilder::new(shape.shape.clone())
+                        .position(to_pose(&(offset * shape.origin)))
+                        .density(link_density as Real);
+                    let is_caster = diff_drive.as_ref().is_some_and(|d| d.casters.contains(&l));
+                    colliders.push(if is_caster {
+                        // A swivel caster rolls whichever way the base moves: no friction.
+                        builder.friction(0.0).friction_combine_rule(CoefficientCombineRule::Min)
+                    } else if finger_links.contains(&l) {
+                        builder
+                            .friction(FINGER_PAD_FRICTION as Real)
+                            .friction_combine_rule(CoefficientCombineRule::Max)
+                    } else {
+                        builder.friction(friction as Real)
+                    });
                 }
             }
             if mprops.mass() <= 0.0 && colliders.is_empty() {
@@ -378,6 +406,7 @@ impl World {
             diff_drive,
             gripper,
             has_effort: false,
+            gravity_compensation: true,
         });
         self.configure_multibody(handle, options.self_collision);
         self.write_configuration(handle, &q0);

@@ -112,6 +112,10 @@ pub struct NavigateSettings {
     pub stall_time: f64,
     /// Simulated seconds allowed; `None` is 20 s + 4 × the path length / `max_linear_speed`.
     pub time_limit: Option<f64>,
+    /// Bodies the robot carries (a held object, [`crate::arm::Held::bodies`]): no obstacles
+    /// for the base and no blockage when they touch the robot. Not part of a config file.
+    #[serde(skip)]
+    pub carried: Vec<hearth_sim::world::BodyId>,
 }
 
 impl Default for NavigateSettings {
@@ -135,6 +139,7 @@ impl Default for NavigateSettings {
             max_replans: 3,
             stall_time: 4.0,
             time_limit: None,
+            carried: Vec::new(),
         }
     }
 }

@@ -50,9 +50,9 @@ pub struct NavPlan {
     pub length: f64,
 }
 
-/// Bodies entirely below the footprint's clearance (floors, rugs, thresholds) and the
-/// ground, sorted: nothing the base can bump into.
-pub(crate) fn low_bodies(world: &World, footprint: &BaseFootprint) -> Vec<BodyId> {
+/// Bodies entirely below the footprint's clearance (floors, rugs, thresholds), the ground
+/// and what the robot carries, sorted: nothing the base can bump into.
+pub(crate) fn low_bodies(world: &World, footprint: &BaseFootprint, carried: &[BodyId]) -> Vec<BodyId> {
     let mut tops: Vec<((u32, u32), f64, BodyId)> = Vec::new();
     for (_, co) in world.colliders().iter() {
         if let Some(parent) = co.parent() {
@@ -70,6 +70,7 @@ pub(crate) fn low_bodies(world: &World, footprint: &BaseFootprint) -> Vec<BodyId
         }
     }
     low.extend(world.ground());
+    low.extend_from_slice(carried);
     low.sort_by_key(|b| b.handle().into_raw_parts());
     low.dedup();
     low
@@ -82,8 +83,9 @@ pub(crate) fn live_view(
     robot: ModelHandle,
     footprint: &BaseFootprint,
     margin: f64,
+    carried: &[BodyId],
 ) -> SkillResult<WorldObstacles> {
-    let low = low_bodies(world, footprint);
+    let low = low_bodies(world, footprint, carried);
     Ok(world
         .obstacles_view(&[robot])?
         .excluding_bodies(&low)
@@ -139,7 +141,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
     settings: &NavigateSettings,
     rng: &mut R,
 ) -> SkillResult<NavPlan> {
-    let view = live_view(world, robot, footprint, settings.margin)?;
+    let view = live_view(world, robot, footprint, settings.margin, &settings.carried)?;
     let mut validity = FootprintValidity::new(view.clone(), *footprint);
     // Where the margin leaves no way through (a narrow doorway), the plan may come as close
     // as the minimum margin.

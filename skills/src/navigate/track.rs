@@ -205,7 +205,7 @@ pub(crate) fn track(
     totals: &mut Totals,
 ) -> SkillResult<Outcome> {
     let dt = world.config().control_dt();
-    let clear = FootprintValidity::new(live_view(world, robot, footprint, 0.0)?, *footprint);
+    let clear = FootprintValidity::new(live_view(world, robot, footprint, 0.0, &s.carried)?, *footprint);
     let mut f = Follower::new(plan, &clear);
     let goal_xy = xy(&goal);
     let (mut v_cmd, mut w_cmd) = (0.0, 0.0);
@@ -220,7 +220,7 @@ pub(crate) fn track(
     // Turning in place onto the next stretch (at the start and after each corner).
     let mut aligning = true;
     // What the base stands on is no obstacle.
-    let support = low_bodies(world, footprint);
+    let support = low_bodies(world, footprint, &s.carried);
     let key = |b: &hearth_sim::world::BodyId| b.handle().into_raw_parts();
     loop {
         if world.time() > deadline {
@@ -346,7 +346,7 @@ pub(crate) fn back_off(
     distance: f64,
     totals: &mut Totals,
 ) -> SkillResult<()> {
-    let view = live_view(world, robot, footprint, 0.0)?;
+    let view = live_view(world, robot, footprint, 0.0, &s.carried)?;
     let mut check = FootprintValidity::new(view, *footprint);
     let start = planar_pose(world, robot)?;
     let (sin, cos) = start[2].sin_cos();
@@ -445,7 +445,7 @@ pub(crate) fn teleport(
     s: &NavigateSettings,
     totals: &mut Totals,
 ) -> SkillResult<()> {
-    let view = live_view(world, robot, footprint, 0.0)?;
+    let view = live_view(world, robot, footprint, 0.0, &s.carried)?;
     let mut validity = FootprintValidity::new(view, *footprint);
     let start = plan.poses[0];
     // The base may start touching something; it leaves from where it stands.
