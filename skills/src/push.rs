@@ -212,26 +212,37 @@ pub fn push_at_point<R: Rng + ?Sized>(
         .ok_or_else(|| SkillError::BadInput(format!("push normal {n:?} is unusable")))?;
     let body_name = world.body_name(body).unwrap_or("").to_owned();
     let local = world.body_pose(body)?.inverse() * p;
-    let origin = p + n * (settings.standoff + arm.settings().tool_reach);
-    // The pre-push pose: approach along −n; the roll about it is free, tried in quarter turns.
+    // The pre-push pose: the fingertips `standoff` off the point, the gripper pointing at it
+    // along −n, or, where the arm cannot get there, tilted off −n (from above, from the
+    // sides, from below): the push itself still runs along −n. The roll about the gripper's
+    // axis is free, tried in quarter turns straight on and in half turns tilted.
     let mut last = None;
     let mut plan = None;
-    for roll in [
-        0.0,
-        std::f64::consts::FRAC_PI_2,
-        -std::f64::consts::FRAC_PI_2,
-        std::f64::consts::PI,
-    ] {
-        let pose = Isometry3::from_parts(Translation3::from(origin.coords), approach_rotation(&-n, roll)?);
-        match arm.plan(world, &ArmTarget::Pose(pose), &[], rng) {
-            Ok(pl) => {
-                plan = Some(pl);
-                break;
+    'search: for (pitch, yaw) in APPROACH_TILTS {
+        let approach = tilted(&-n, pitch.to_radians(), yaw.to_radians());
+        let origin = p - approach * (settings.standoff + arm.settings().tool_reach);
+        let rolls: &[f64] = if pitch == 0.0 && yaw == 0.0 {
+            &[
+                0.0,
+                std::f64::consts::FRAC_PI_2,
+                -std::f64::consts::FRAC_PI_2,
+                std::f64::consts::PI,
+            ]
+        } else {
+            &[0.0, std::f64::consts::FRAC_PI_2]
+        };
+        for &roll in rolls {
+            let pose = Isometry3::from_parts(Translation3::from(origin.coords), approach_rotation(&approach, roll)?);
+            match arm.plan(world, &ArmTarget::Pose(pose), &[], rng) {
+                Ok(pl) => {
+                    plan = Some(pl);
+                    break 'search;
+                }
+                Err(e @ (SkillError::IkFailed(_) | SkillError::PlanningFailed(_) | SkillError::PlanningTimeout(_))) => {
+                    last = Some(e)
+                }
+                Err(e) => return Err(e),
             }
-            Err(e @ (SkillError::IkFailed(_) | SkillError::PlanningFailed(_) | SkillError::PlanningTimeout(_))) => {
-                last = Some(e)
-            }
-            Err(e) => return Err(e),
         }
     }
     let plan = plan.ok_or_else(|| {
@@ -278,6 +289,28 @@ pub fn push_at_point<R: Rng + ?Sized>(
     Ok(report)
 }
 
+/// Tilts of the pre-push approach off −n, degrees: (down from above, sideways).
+const APPROACH_TILTS: [(f64, f64); 6] = [
+    (0.0, 0.0),
+    (30.0, 0.0),
+    (0.0, 30.0),
+    (0.0, -30.0),
+    (50.0, 0.0),
+    (-25.0, 0.0),
+];
+
+/// `d` (a unit vector) turned `pitch` radians towards world down (about the horizontal axis
+/// across it) and `yaw` radians about world up. A vertical `d` is only turned about up.
+fn tilted(d: &Vector3<f64>, pitch: f64, yaw: f64) -> Vector3<f64> {
+    let across = d.cross(&Vector3::z());
+    let pitched = match across.try_normalize(1e-6) {
+        // Turning about `across` by +pitch takes a horizontal `d` downwards.
+        Some(axis) => nalgebra::UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), -pitch) * d,
+        None => *d,
+    };
+    nalgebra::UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * pitched
+}
+
 fn check_settings(s: &PushSettings) -> SkillResult<()> {
     for (what, x) in [
         ("distance", s.distance),
@@ -295,4 +328,21 @@ fn check_settings(s: &PushSettings) -> SkillResult<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tilted;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn tilts_turn_the_approach_down_and_sideways() {
+        let d = Vector3::x();
+        let down = tilted(&d, 30f64.to_radians(), 0.0);
+        assert!((down - Vector3::new(30f64.to_radians().cos(), 0.0, -0.5)).norm() < 1e-12);
+        let left = tilted(&d, 0.0, 30f64.to_radians());
+        assert!((left - Vector3::new(30f64.to_radians().cos(), 0.5, 0.0)).norm() < 1e-12);
+        // A vertical approach has no "down" to turn to.
+        assert!((tilted(&-Vector3::z(), 0.5, 0.0) + Vector3::z()).norm() < 1e-12);
+    }
 }
