@@ -15,7 +15,8 @@ use crate::randomize::{Randomizer, Stream, add_depth_noise, perturb_pose2d, rand
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
-    ModalitySet, OccupancyGrid, OccupancyGridSpec, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
+    ModalitySet, OccupancyGrid, OccupancyGridSpec, RASTER_MODALITIES, RenderOptions, Scan, VisualScene,
+    lidar_pose_in_base, model_items,
 };
 use crate::world::{BUILDING_PREFIX, LoadedScene, ModelHandle, Snapshot, World, WorldConfig};
 
@@ -233,7 +234,12 @@ impl Env {
                 far: c.far,
             };
             intrinsics.validate()?;
-            let backend: Backend = c.backend.parse()?;
+            let mut backend: Backend = c.backend.parse()?;
+            // Depth, point clouds, normals and ids need no colour pipeline: `auto` takes the CPU
+            // rasteriser for them (same triangles as wgpu, a fraction of the cost per frame).
+            if backend == Backend::Auto && camera_set.iter().all(|m| RASTER_MODALITIES.contains(m)) {
+                backend = Backend::Raster;
+            }
             Some(Camera::new(
                 &world,
                 Some(robot),

@@ -6,6 +6,8 @@
 //!   frames and units.
 //! - [`VisualScene`] lists every visual shape with its material, semantic class
 //!   ([`SemanticClass`]) and instance id.
+//! - [`RasterCamera`] is a CPU depth rasteriser for the geometric modalities (depth, point
+//!   cloud, normals, ids), the [`Backend::Raster`] backend.
 //! - [`RayScene`] is the ray-casting engine (parry shapes in a BVH) that the ray-cast camera
 //!   and the LiDARs share.
 //! - [`LidarSpec`], [`LidarNoise`], [`Lidar`] and the output [`Scan`] describe a LiDAR; the
@@ -19,6 +21,7 @@ mod error;
 pub mod gpu;
 pub mod lidar;
 pub mod occupancy;
+pub mod raster;
 pub mod raycast;
 pub mod save;
 pub mod shading;
@@ -33,6 +36,7 @@ pub use lidar::{
     lidar_pose_in_base, model_items,
 };
 pub use occupancy::{FREE, MAX_GRID_SIDE, OCCUPIED, OccupancyGrid, OccupancyGridSpec, UNKNOWN};
+pub use raster::{RASTER_MODALITIES, RasterCamera};
 pub use raycast::{RayHit, RayScene, RaycastCamera};
 pub use visuals::{
     Instance, PbrMaterial, SceneLight, SemanticClass, VisualItem, VisualScene, VisualShape, default_lights,
