@@ -733,23 +733,38 @@ impl Env {
     }
 
     fn sense(&mut self) -> EnvResult<()> {
-        if let Some(camera) = &mut self.camera {
-            if self.camera_offset == Isometry3::identity() {
-                camera.render(&self.world, self.camera_set)?;
+        let world = &self.world;
+        let (robot, offset, set) = (self.robot, self.camera_offset, self.camera_set);
+        let render = |camera: &mut Camera| -> EnvResult<()> {
+            if offset == Isometry3::identity() {
+                camera.render(world, set)?;
             } else {
-                let pose = camera.pose(&self.world)? * self.camera_offset;
-                camera.render_from(&self.world, &pose, self.camera_set)?;
+                let pose = camera.pose(world)? * offset;
+                camera.render_from(world, &pose, set)?;
             }
-        }
-        if let Some(rig) = &mut self.lidar {
-            let base = self.world.base_pose(self.robot)?;
+            Ok(())
+        };
+        let scan = |rig: &mut LidarRig| -> EnvResult<()> {
+            let base = world.base_pose(robot)?;
             let sensor = base * rig.sensor_in_base;
             for (l, scan, culled) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
-                l.scan_culled(culled, &rig.visuals, &self.world, &sensor, scan);
+                l.scan_culled(culled, &rig.visuals, world, &sensor, scan);
             }
             if let (Some(grid), Some((_, scan, _))) = (&mut rig.grid, &rig.planar) {
                 grid.update(scan, &rig.sensor_in_base)?;
             }
+            Ok(())
+        };
+        // The camera and the LiDARs read the world only: with both, they run side by side.
+        match (&mut self.camera, &mut self.lidar) {
+            (Some(camera), Some(rig)) => {
+                let (a, b) = rayon::join(|| render(camera), || scan(rig));
+                a?;
+                b?;
+            }
+            (Some(camera), None) => render(camera)?,
+            (None, Some(rig)) => scan(rig)?,
+            (None, None) => {}
         }
         Ok(())
     }

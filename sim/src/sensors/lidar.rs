@@ -984,8 +984,9 @@ impl CulledRays {
             && self.built_at.is_some_and(|b| {
                 let normal = b.rotation * Vector3::z();
                 let moved = sensor.translation.vector - b.translation.vector;
-                // How far the scan plane tilts at the far end of the range.
-                let tilt = b.rotation.angle_to(&sensor.rotation) * spec.max_range;
+                // How far the scan plane tilts at the far end of the range (a turn about the
+                // plane's own normal, a yaw for a level scanner, keeps the plane).
+                let tilt = normal.angle(&(sensor.rotation * Vector3::z())) * spec.max_range;
                 moved.norm() <= CULL_MARGIN / 2.0 && (!planar || moved.dot(&normal).abs() + tilt <= PLANE_MARGIN / 2.0)
             });
         let rebuilt = !still_valid;

@@ -74,31 +74,56 @@ fn lerp(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
     ]
 }
 
-/// The z-buffer and the triangle fill.
-#[derive(Clone, Debug, Default)]
-struct Target {
-    /// Per pixel: 1/z of the nearest surface so far (0: nothing).
-    inv_z: Vec<f32>,
-    /// Per pixel: the index of the triangle that wrote it (into the index buffer, /3).
-    tri: Vec<u32>,
+/// Largest integer not above `x` (saturating), without a libm call.
+#[inline(always)]
+fn floor_i(x: f32) -> i32 {
+    let i = x as i32;
+    i - ((i as f32) > x) as i32
 }
 
-impl Target {
-    fn clear(&mut self, pixels: usize) {
-        self.inv_z.clear();
-        self.inv_z.resize(pixels, 0.0);
-        self.tri.clear();
-        self.tri.resize(pixels, NO_ITEM);
-    }
+/// Smallest integer not below `x` (saturating), without a libm call.
+#[inline(always)]
+fn ceil_i(x: f32) -> i32 {
+    let i = x as i32;
+    i + ((i as f32) < x) as i32
+}
 
-    /// Fills the screen triangle `s` (pixel coordinates) where the plane's 1/z (`plane`:
-    /// 1/z = a·x + b·y + c at pixel centre (x, y)) is nearer than what is there.
+/// How an edge bounds the pixels of a row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum EdgeKind {
+    /// Inside is x ≥ slope·y + offset.
+    Left,
+    /// Inside is x ≤ slope·y + offset.
+    Right,
+    /// A horizontal edge: inside is slope·y + offset ≥ 0.
+    Flat,
+}
+
+/// A screen triangle ready to fill: its edges as bounds on x per row, its 1/z plane and its
+/// pixel box.
+#[derive(Clone, Copy, Debug)]
+struct Setup {
+    edges: [(EdgeKind, f32, f32); 3],
+    /// 1/z = a·x + b·y + c at pixel centre (x, y).
+    plane: [f32; 3],
+    /// Pixel box (inclusive).
+    u0: i32,
+    u1: i32,
+    v0: u32,
+    v1: u32,
+    /// Index of the source triangle.
+    tri: u32,
+}
+
+impl Setup {
+    /// The screen triangle `s` (pixel coordinates) with 1/z `plane`, or `None` when it covers
+    /// no pixel centre.
     #[inline]
-    fn fill(&mut self, k: &Projection, s: [[f32; 2]; 3], plane: [f32; 3], tri: u32) {
+    fn new(k: &Projection, s: [[f32; 2]; 3], plane: [f32; 3], tri: u32) -> Option<Self> {
         let [p0, p1, p2] = s;
         let area = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
         if !(area.abs() > 1e-12) {
-            return;
+            return None;
         }
         // Counter-clockwise in pixel coordinates from here on.
         let (p1, p2) = if area > 0.0 { (p1, p2) } else { (p2, p1) };
@@ -109,66 +134,114 @@ impl Target {
         // Pixels whose centres (i + ½) fall in the box.
         let (w, h) = (k.width as f32, k.height as f32);
         if !(xmax >= 0.5 && ymax >= 0.5 && xmin <= w - 0.5 && ymin <= h - 0.5) {
-            return;
+            return None;
         }
-        let u0 = (xmin - 0.5).ceil().max(0.0) as usize;
-        let u1 = ((xmax - 0.5).floor().min(w - 1.0)) as usize;
-        let v0 = (ymin - 0.5).ceil().max(0.0) as usize;
-        let v1 = ((ymax - 0.5).floor().min(h - 1.0)) as usize;
+        let u0 = ceil_i(xmin - 0.5).max(0);
+        let u1 = floor_i(xmax - 0.5).min(k.width as i32 - 1);
+        let v0 = ceil_i(ymin - 0.5).max(0);
+        let v1 = floor_i(ymax - 0.5).min(k.height as i32 - 1);
         if u0 > u1 || v0 > v1 {
-            return;
+            return None;
         }
-        // Edge functions e(x, y) = A x + B y + C, ≥ 0 inside.
+        // Edge function e(x, y) = A x + B y + C ≥ 0 inside, solved for x per row.
         let edge = |a: [f32; 2], b: [f32; 2]| {
-            let ea = a[1] - b[1];
-            let eb = b[0] - a[0];
-            [ea, eb, a[0] * b[1] - a[1] * b[0]]
+            let (ea, eb, ec) = (a[1] - b[1], b[0] - a[0], a[0] * b[1] - a[1] * b[0]);
+            if ea > 0.0 {
+                (EdgeKind::Left, -eb / ea, -ec / ea)
+            } else if ea < 0.0 {
+                (EdgeKind::Right, -eb / ea, -ec / ea)
+            } else {
+                (EdgeKind::Flat, eb, ec)
+            }
         };
-        let e = [edge(p0, p1), edge(p1, p2), edge(p2, p0)];
-        let [pa, pb, pc] = plane;
-        let width = k.width;
+        Some(Self {
+            edges: [edge(p0, p1), edge(p1, p2), edge(p2, p0)],
+            plane,
+            u0,
+            u1,
+            v0: v0 as u32,
+            v1: v1 as u32,
+            tri,
+        })
+    }
+
+    /// Fills the triangle's pixels in `band` where it is nearer than what is there (and
+    /// records the triangle per pixel when `IDS`).
+    #[inline]
+    fn fill<const IDS: bool>(&self, band: &mut Band<'_>) {
+        let v0 = (self.v0 as usize).max(band.first_row);
+        let v1 = (self.v1 as usize).min(band.first_row + band.rows - 1);
+        let [pa, pb, pc] = self.plane;
         for v in v0..=v1 {
             let y = v as f32 + 0.5;
             // The span of the row inside all three edges.
-            let (mut lo, mut hi) = (u0 as f32 + 0.5, u1 as f32 + 0.5);
+            let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
             let mut empty = false;
-            for [ea, eb, ec] in e {
-                let r = eb * y + ec;
-                if ea > 0.0 {
-                    lo = lo.max(-r / ea);
-                } else if ea < 0.0 {
-                    hi = hi.min(-r / ea);
-                } else if r < 0.0 {
-                    empty = true;
+            for (kind, slope, offset) in self.edges {
+                let x = slope * y + offset;
+                match kind {
+                    EdgeKind::Left => lo = lo.max(x),
+                    EdgeKind::Right => hi = hi.min(x),
+                    EdgeKind::Flat => empty |= x < 0.0,
                 }
             }
-            if empty || lo > hi {
-                continue;
-            }
-            let a = (lo - 0.5).ceil().max(u0 as f32);
-            let b = (hi - 0.5).floor().min(u1 as f32);
-            if a > b {
+            let a = ceil_i(lo - 0.5).max(self.u0);
+            let b = floor_i(hi - 0.5).min(self.u1);
+            if empty || !(lo <= hi) || a > b {
                 continue;
             }
             let (a, b) = (a as usize, b as usize);
-            let row = v * width;
+            let row = (v - band.first_row) * band.width;
             let base = pb * y + pc;
-            for u in a..=b {
-                let x = u as f32 + 0.5;
-                // Inside test at the exact centre (the span bounds may round either way).
-                if e.iter().any(|[ea, eb, ec]| ea * x + eb * y + ec < 0.0) {
-                    continue;
+            let inv_z = &mut band.inv_z[row + a..=row + b];
+            let x0 = a as f32 + 0.5;
+            if IDS {
+                let tris = &mut band.tri[row + a..=row + b];
+                for (j, (z, t)) in inv_z.iter_mut().zip(tris.iter_mut()).enumerate() {
+                    let iz = pa * (x0 + (j as i32) as f32) + base;
+                    if iz > *z {
+                        *z = iz;
+                        *t = self.tri;
+                    }
                 }
-                let iz = pa * x + base;
-                let i = row + u;
-                if iz > self.inv_z[i] {
-                    self.inv_z[i] = iz;
-                    self.tri[i] = tri;
+            } else {
+                for (j, z) in inv_z.iter_mut().enumerate() {
+                    let iz = pa * (x0 + (j as i32) as f32) + base;
+                    // A plain compare (no NaN rules) lets this loop run on SIMD lanes.
+                    *z = if iz > *z { iz } else { *z };
                 }
             }
         }
     }
 }
+
+/// Rows `first_row..first_row + rows` of the z-buffer.
+struct Band<'a> {
+    inv_z: &'a mut [f32],
+    tri: &'a mut [u32],
+    first_row: usize,
+    rows: usize,
+    width: usize,
+}
+
+impl Band<'_> {
+    /// Fills every setup that reaches the band (recording triangles when `ids`).
+    fn fill_all(&mut self, setups: &[Setup], ids: bool) {
+        let (r0, r1) = (self.first_row as u32, (self.first_row + self.rows) as u32);
+        for s in setups {
+            if s.v1 >= r0 && s.v0 < r1 {
+                if ids {
+                    s.fill::<true>(self);
+                } else {
+                    s.fill::<false>(self);
+                }
+            }
+        }
+    }
+}
+
+/// Images of at least this many pixels are filled in two bands on two threads.
+const PARALLEL_MIN_PIXELS: usize = 64 * 64;
 
 /// The CPU depth rasteriser backend (see the [module docs](self)).
 ///
@@ -204,8 +277,14 @@ pub struct RasterCamera {
     ids: Vec<(u32, u32)>,
     /// Scratch: camera-frame vertices of the visible items.
     cam_vertices: Vec<[f32; 3]>,
-    /// Scratch: the z-buffer.
-    target: Target,
+    /// Scratch: per vertex, the frustum sides it lies beyond (see [`outcode`]).
+    outcodes: Vec<u8>,
+    /// Per pixel: 1/z of the nearest surface (0: nothing).
+    inv_z: Vec<f32>,
+    /// Per pixel: the triangle seen (index into the index buffer / 3).
+    tri: Vec<u32>,
+    /// Scratch: the triangles of this frame, set up for filling.
+    setups: Vec<Setup>,
     /// Items drawn in the last frame.
     drawn: usize,
 }
@@ -243,12 +322,15 @@ impl RasterCamera {
             intrinsics,
             positions: mesh.vertices.iter().map(|v| v.pos).collect(),
             cam_vertices: vec![[0.0; 3]; mesh.vertices.len()],
+            outcodes: vec![0; mesh.vertices.len()],
             indices: mesh.indices,
             ranges: mesh.ranges,
             vertex_ranges,
             tri_item,
             ids: scene.items.iter().map(|i| (i.semantic, i.instance)).collect(),
-            target: Target::default(),
+            inv_z: Vec::new(),
+            tri: Vec::new(),
+            setups: Vec::new(),
             drawn: 0,
         })
     }
@@ -299,11 +381,17 @@ impl RasterCamera {
             width: k.width as usize,
             height: k.height as usize,
         };
-        self.target.clear(k.pixels());
+        self.setups.clear();
         let cam_inv = camera.inverse();
         let (tx, ty) = (k.width as f64 / 2.0 / k.fx(), k.height as f64 / 2.0 / k.fy());
         let (sx, sy) = ((1.0 + tx * tx).sqrt(), (1.0 + ty * ty).sqrt());
         self.drawn = 0;
+        let frustum = Frustum {
+            tx: tx as f32,
+            ty: ty as f32,
+            near: k.near as f32,
+            far: k.far as f32,
+        };
         for (i, pose) in item_poses.iter().enumerate() {
             let r = self.ranges[i];
             if r.index_count == 0 {
@@ -325,25 +413,77 @@ impl RasterCamera {
             self.drawn += 1;
             let m = mv.to_homogeneous().cast::<f32>();
             let (v0, v1) = self.vertex_ranges[i];
-            for (dst, p) in self.cam_vertices[v0 as usize..v1 as usize]
+            let range = v0 as usize..v1 as usize;
+            for ((dst, code), p) in self.cam_vertices[range.clone()]
                 .iter_mut()
-                .zip(&self.positions[v0 as usize..v1 as usize])
+                .zip(&mut self.outcodes[range.clone()])
+                .zip(&self.positions[range])
             {
-                *dst = [
+                let q = [
                     m[(0, 0)] * p[0] + m[(0, 1)] * p[1] + m[(0, 2)] * p[2] + m[(0, 3)],
                     m[(1, 0)] * p[0] + m[(1, 1)] * p[1] + m[(1, 2)] * p[2] + m[(1, 3)],
                     m[(2, 0)] * p[0] + m[(2, 1)] * p[1] + m[(2, 2)] * p[2] + m[(2, 3)],
                 ];
+                *dst = q;
+                *code = outcode(q, &frustum);
             }
             let first = r.first_index as usize;
             for t in (first..first + r.index_count as usize).step_by(3) {
-                let tri =
-                    [self.indices[t], self.indices[t + 1], self.indices[t + 2]].map(|v| self.cam_vertices[v as usize]);
-                draw_triangle(&mut self.target, &proj, tri, r.closed, (t / 3) as u32);
+                let v = [self.indices[t], self.indices[t + 1], self.indices[t + 2]];
+                // Wholly beyond one side of the frustum: no pixel centre sees it.
+                if v.iter().fold(u8::MAX, |acc, &i| acc & self.outcodes[i as usize]) != 0 {
+                    continue;
+                }
+                let tri = v.map(|i| self.cam_vertices[i as usize]);
+                setup_triangle(&mut self.setups, &proj, tri, r.closed, (t / 3) as u32);
             }
         }
+        let ids = [Modality::Normal, Modality::Seg, Modality::InsSeg]
+            .iter()
+            .any(|m| modalities.contains(*m));
+        self.fill(&proj, ids);
         self.resolve(&proj, modalities, frame);
         Ok(())
+    }
+
+    /// Clears the z-buffer and fills this frame's triangles into it, in two bands on two
+    /// threads for larger images (each pixel sees the triangles in the same order either way).
+    fn fill(&mut self, k: &Projection, ids: bool) {
+        let pixels = k.width * k.height;
+        self.inv_z.clear();
+        self.inv_z.resize(pixels, 0.0);
+        self.tri.clear();
+        self.tri.resize(pixels, NO_ITEM);
+        let setups = &self.setups[..];
+        if pixels >= PARALLEL_MIN_PIXELS && k.height >= 2 && rayon::current_num_threads() >= 2 {
+            let top = k.height / 2;
+            let (za, zb) = self.inv_z.split_at_mut(top * k.width);
+            let (ta, tb) = self.tri.split_at_mut(top * k.width);
+            let mut a = Band {
+                inv_z: za,
+                tri: ta,
+                first_row: 0,
+                rows: top,
+                width: k.width,
+            };
+            let mut b = Band {
+                inv_z: zb,
+                tri: tb,
+                first_row: top,
+                rows: k.height - top,
+                width: k.width,
+            };
+            rayon::join(|| a.fill_all(setups, ids), || b.fill_all(setups, ids));
+        } else {
+            Band {
+                inv_z: &mut self.inv_z,
+                tri: &mut self.tri,
+                first_row: 0,
+                rows: k.height,
+                width: k.width,
+            }
+            .fill_all(setups, ids);
+        }
     }
 
     /// Turns the z-buffer into the frame's modalities.
@@ -359,30 +499,35 @@ impl RasterCamera {
             want(Modality::Seg),
             want(Modality::InsSeg),
         );
-        for v in 0..k.height {
-            let ry = (v as f32 + 0.5 - k.cy) / k.fy;
-            for u in 0..k.width {
-                let i = v * k.width + u;
-                let iz = self.target.inv_z[i];
-                let z = if iz > 0.0 { 1.0 / iz } else { 0.0 };
-                let seen = iz > 0.0 && z >= near && z <= far;
-                let z = if seen { z } else { 0.0 };
-                if depth {
-                    frame.depth[i] = z;
-                }
-                if pc {
+        // 1/0 is +∞, beyond `far`: pixels that saw nothing read 0 like out-of-range ones.
+        let depth_of = |iz: f32| {
+            let z = 1.0 / iz;
+            if z >= near && z <= far { z } else { 0.0 }
+        };
+        if depth {
+            for (d, &iz) in frame.depth.iter_mut().zip(&self.inv_z) {
+                *d = depth_of(iz);
+            }
+        }
+        if pc {
+            for v in 0..k.height {
+                let ry = (v as f32 + 0.5 - k.cy) / k.fy;
+                for u in 0..k.width {
+                    let i = v * k.width + u;
+                    let z = depth_of(self.inv_z[i]);
                     let rx = (u as f32 + 0.5 - k.cx) / k.fx;
                     frame.pc[i] = [rx * z, ry * z, z];
                 }
+            }
+        }
+        if normal || seg || ins {
+            for (i, &iz) in self.inv_z.iter().enumerate() {
+                let seen = depth_of(iz) > 0.0;
                 if normal {
-                    frame.normal[i] = if seen {
-                        self.normal_of(self.target.tri[i])
-                    } else {
-                        [0.0; 3]
-                    };
+                    frame.normal[i] = if seen { self.normal_of(self.tri[i]) } else { [0.0; 3] };
                 }
                 let (s, n) = if seen {
-                    self.ids[self.tri_item[self.target.tri[i] as usize] as usize]
+                    self.ids[self.tri_item[self.tri[i] as usize] as usize]
                 } else {
                     (0, 0)
                 };
@@ -411,10 +556,31 @@ impl RasterCamera {
     }
 }
 
+/// The view frustum in the camera frame: |x| ≤ tx·z, |y| ≤ ty·z, near ≤ z ≤ far.
+#[derive(Clone, Copy, Debug)]
+struct Frustum {
+    tx: f32,
+    ty: f32,
+    near: f32,
+    far: f32,
+}
+
+/// One bit per frustum side that camera-frame point `p` lies beyond.
+#[inline(always)]
+fn outcode(p: [f32; 3], f: &Frustum) -> u8 {
+    let [x, y, z] = p;
+    (x > f.tx * z) as u8
+        | ((x < -f.tx * z) as u8) << 1
+        | ((y > f.ty * z) as u8) << 2
+        | ((y < -f.ty * z) as u8) << 3
+        | ((z < f.near) as u8) << 4
+        | ((z > f.far) as u8) << 5
+}
+
 /// Clips a camera-frame triangle against the near plane, culls it when it is a back face of a
-/// closed shape, and fills what is left.
+/// closed shape, and sets up what is left for filling.
 #[inline]
-fn draw_triangle(target: &mut Target, k: &Projection, t: [[f32; 3]; 3], closed: bool, tri: u32) {
+fn setup_triangle(out: &mut Vec<Setup>, k: &Projection, t: [[f32; 3]; 3], closed: bool, tri: u32) {
     let [a, b, c] = t;
     let n = cross(sub(b, a), sub(c, a));
     let d = dot(n, a);
@@ -428,13 +594,14 @@ fn draw_triangle(target: &mut Target, k: &Projection, t: [[f32; 3]; 3], closed: 
         return;
     }
     // 1/z = (n·(rx, ry, 1)) / d with rx = (x − cx)/fx, ry = (y − cy)/fy.
+    let inv_d = 1.0 / d;
     let plane = [
-        n[0] / (k.fx * d),
-        n[1] / (k.fy * d),
-        (n[2] - n[0] * k.cx / k.fx - n[1] * k.cy / k.fy) / d,
+        n[0] / k.fx * inv_d,
+        n[1] / k.fy * inv_d,
+        (n[2] - n[0] * k.cx / k.fx - n[1] * k.cy / k.fy) * inv_d,
     ];
     if inside.iter().all(|&x| x) {
-        target.fill(k, [k.project(a), k.project(b), k.project(c)], plane, tri);
+        out.extend(Setup::new(k, [k.project(a), k.project(b), k.project(c)], plane, tri));
         return;
     }
     // Sutherland–Hodgman against z = near: at most four vertices.
@@ -460,7 +627,7 @@ fn draw_triangle(target: &mut Target, k: &Projection, t: [[f32; 3]; 3], closed: 
     }
     let s: [[f32; 2]; 4] = poly.map(|p| if p[2] > 0.0 { k.project(p) } else { [0.0; 2] });
     for j in 1..len - 1 {
-        target.fill(k, [s[0], s[j], s[j + 1]], plane, tri);
+        out.extend(Setup::new(k, [s[0], s[j], s[j + 1]], plane, tri));
     }
 }
 
@@ -492,35 +659,39 @@ mod tests {
             let d = [-1.0, 1.0, z1];
             [[a, d, c], [a, c, b]]
         };
-        let mut t = Target::default();
-        t.clear(64);
-        for (n, tri) in quad(2.0, 2.0).into_iter().enumerate() {
-            draw_triangle(&mut t, &k, tri, true, n as u32);
-        }
-        let covered: Vec<usize> = (0..64).filter(|&i| t.inv_z[i] > 0.0).collect();
+        let draw = |tris: &[([[f32; 3]; 3], bool)]| {
+            let mut setups = Vec::new();
+            for (n, (tri, closed)) in tris.iter().enumerate() {
+                setup_triangle(&mut setups, &k, *tri, *closed, n as u32);
+            }
+            let (mut inv_z, mut tri) = (vec![0.0f32; 64], vec![NO_ITEM; 64]);
+            Band {
+                inv_z: &mut inv_z,
+                tri: &mut tri,
+                first_row: 0,
+                rows: 8,
+                width: 8,
+            }
+            .fill_all(&setups, true);
+            inv_z
+        };
+        let t = draw(&quad(2.0, 2.0).map(|q| (q, true)));
+        let covered: Vec<usize> = (0..64).filter(|&i| t[i] > 0.0).collect();
         // x/z ∈ [−½, ½] → pixels 2..=5 in u and v.
         assert_eq!(covered.len(), 16, "{covered:?}");
         for &i in &covered {
-            assert!((1.0 / t.inv_z[i] - 2.0).abs() < 1e-5);
+            assert!((1.0 / t[i] - 2.0).abs() < 1e-5);
             let (u, v) = (i % 8, i / 8);
             assert!((2..=5).contains(&u) && (2..=5).contains(&v));
         }
         // The same square wound the other way is a back face.
-        let mut t = Target::default();
-        t.clear(64);
-        for tri in quad(2.0, 2.0) {
-            draw_triangle(&mut t, &k, [tri[0], tri[2], tri[1]], true, 0);
-        }
-        assert!(t.inv_z.iter().all(|&z| z == 0.0));
+        let t = draw(&quad(2.0, 2.0).map(|q| ([q[0], q[2], q[1]], true)));
+        assert!(t.iter().all(|&z| z == 0.0));
         // Tilted through the near plane: the far half is drawn, with plane depth.
-        let mut t = Target::default();
-        t.clear(64);
-        for tri in quad(-1.0, 3.0) {
-            draw_triangle(&mut t, &k, tri, false, 0);
-        }
-        let drawn = t.inv_z.iter().filter(|&&z| z > 0.0).count();
+        let t = draw(&quad(-1.0, 3.0).map(|q| (q, false)));
+        let drawn = t.iter().filter(|&&z| z > 0.0).count();
         assert!(drawn > 0);
-        for (i, &iz) in t.inv_z.iter().enumerate() {
+        for (i, &iz) in t.iter().enumerate() {
             if iz > 0.0 {
                 assert!(1.0 / iz >= 0.1 - 1e-4, "pixel {i} at {}", 1.0 / iz);
             }
