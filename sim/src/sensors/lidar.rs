@@ -893,8 +893,10 @@ pub struct CulledRays {
 /// Slack (m) added to the reach of a sensor when culling.
 const CULL_MARGIN: f64 = 0.5;
 
-/// Slack (m) added on each side of a planar scanner's scan plane when culling.
-const PLANE_MARGIN: f64 = 0.05;
+/// Slack (m) added on each side of a planar scanner's scan plane when culling. Wide enough that
+/// a wheeled base rocking on its suspension (the plane tilting by a degree at the far end of
+/// the range) does not rebuild the copy every step.
+const PLANE_MARGIN: f64 = 0.3;
 
 /// Item-frame bounding box of a shape: (centre, half extents).
 fn local_box(shape: &super::visuals::VisualShape) -> (Vector3<f64>, Vector3<f64>) {
