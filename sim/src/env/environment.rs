@@ -381,6 +381,21 @@ impl Env {
         (self.task.start(), [g[0], g[1]])
     }
 
+    /// The camera backend in use (`auto` resolved: [`Backend::Raster`], [`Backend::Wgpu`] or
+    /// [`Backend::Raycast`]), or `None` without camera observations.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// use hearth_sim::sensors::Backend;
+    /// let toml = "[task]\nname = \"point_nav_random\"\n[sensors]\nmodalities = [\"task_obs\", \"depth\"]\n";
+    /// let env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// assert_eq!(env.camera_backend(), Some(Backend::Raster));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn camera_backend(&self) -> Option<Backend> {
+        self.camera.as_ref().map(Camera::backend)
+    }
+
     /// The task's name (`config.task.name`).
     ///
     /// ```no_run
