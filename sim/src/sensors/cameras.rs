@@ -1,5 +1,6 @@
-//! [`Camera`]: a camera in the world, on a robot link or free, rendered by the wgpu backend or
-//! the ray caster (chosen by [`Backend`]; `auto` takes wgpu when an adapter exists).
+//! [`Camera`]: a camera in the world, on a robot link or free, rendered by the wgpu backend,
+//! the ray caster or the CPU depth rasteriser (chosen by [`Backend`]; `auto` takes wgpu when an
+//! adapter exists).
 
 use nalgebra::Isometry3;
 

@@ -1,4 +1,5 @@
-//! Sensors: cameras (a wgpu rasteriser and a driver-free ray caster with the same modalities),
+//! Sensors: cameras (a wgpu rasteriser and a driver-free ray caster with the same modalities,
+//! and a CPU depth rasteriser for the geometric ones),
 //! 1- and 16-beam LiDAR, and local occupancy grids, all reading the live [`World`](crate::world::World).
 //!
 //! - [`CameraIntrinsics`], [`Modality`], [`Preset`], [`RenderOptions`], [`Backend`],
