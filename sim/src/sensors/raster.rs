@@ -22,6 +22,12 @@ use super::visuals::VisualScene;
 const NO_ITEM: u32 = u32::MAX;
 
 /// The modalities [`RasterCamera`] renders.
+///
+/// ```
+/// use hearth_sim::sensors::{Modality, RASTER_MODALITIES};
+/// assert!(RASTER_MODALITIES.contains(Modality::Depth));
+/// assert!(!RASTER_MODALITIES.contains(Modality::Rgb));
+/// ```
 pub const RASTER_MODALITIES: ModalitySet = ModalitySet::EMPTY
     .with(Modality::Depth)
     .with(Modality::Pc)
@@ -341,6 +347,16 @@ impl RasterCamera {
     }
 
     /// Number of triangles of the tessellated scene.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraIntrinsics, RasterCamera, VisualScene};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig { ground_plane: false, ..Default::default() }).unwrap();
+    /// world.add_box("crate", [0.5; 3], &nalgebra::Isometry3::identity(), false).unwrap();
+    /// let camera = RasterCamera::new(&VisualScene::from_world(&world), CameraIntrinsics::new(8, 8, 60.0).unwrap()).unwrap();
+    /// assert_eq!(camera.triangles(), 12);
+    /// assert_eq!(camera.items_drawn(), 0, "nothing rendered yet");
+    /// ```
     pub fn triangles(&self) -> usize {
         self.indices.len() / 3
     }
