@@ -530,6 +530,36 @@ fn culled_scans_match_full_scans_as_the_robot_moves() {
 }
 
 #[test]
+fn turning_in_place_keeps_the_culled_copy_and_matches_full_scans() {
+    let (world, _, fetch) = fetch_home();
+    let visuals = VisualScene::from_world(&world);
+    let mut rays = RayScene::new(&visuals);
+    rays.update(&visuals, &world);
+    let own = model_items(&visuals, &world, fetch).unwrap();
+    let mut lidar = Lidar::new(LidarSpec::hokuyo_urg_04lx(), LidarNoise::NONE, 0).unwrap();
+    lidar.ignore_items(own.iter().copied(), IgnoredHits::PassThrough);
+    let mut culled = CulledRays::default();
+    let (mut a, mut b) = (Scan::default(), Scan::default());
+    let start = lidar_pose(&world, fetch, None).unwrap();
+    // A full turn about the scanner's own z axis, 0.3 rad at a time: the scan plane stays.
+    for k in 0..21 {
+        let pose = start * nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3 * k as f64);
+        lidar.scan(&rays, &pose, &mut a);
+        lidar.scan_culled(&mut culled, &visuals, &world, &pose, &mut b);
+        assert_eq!(a.hit, b.hit, "step {k}");
+        assert_eq!(a.items, b.items, "step {k}");
+        for (x, y) in a.ranges.iter().zip(&b.ranges) {
+            assert!((x - y).abs() < 1e-4, "step {k}: {x} vs {y}");
+        }
+    }
+    assert_eq!(culled.rebuilds(), 1);
+    // Tilting the plane does rebuild it.
+    let tilted = start * nalgebra::UnitQuaternion::from_euler_angles(0.05, 0.0, 0.0);
+    lidar.scan_culled(&mut culled, &visuals, &world, &tilted, &mut b);
+    assert_eq!(culled.rebuilds(), 2);
+}
+
+#[test]
 fn culled_scans_follow_bodies_that_move_into_reach() {
     let mut world = World::new(WorldConfig::default()).unwrap();
     let far = world

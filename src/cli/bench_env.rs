@@ -50,6 +50,7 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
     };
 
     let mut env = Env::new(config.clone())?;
+    let backend = env.camera_backend().map(|b| b.name());
     let dim = env.action_space().size();
     let mut action = vec![0.0f32; dim];
     env.reset(a.seed)?;
@@ -80,9 +81,10 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
     let mem = before.zip(after).map(|(b, a2)| (a2 - b) / envs.len() as f64);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
-        "{} with {}: {single:.0} steps/s for one env; {vec_rate:.0} env-steps/s for {} envs on {threads} threads; memory per env {}",
+        "{} with {}{}: {single:.0} steps/s for one env; {vec_rate:.0} env-steps/s for {} envs on {threads} threads; memory per env {}",
         config.task.name,
         config.sensors.modalities.join("+"),
+        backend.map_or(String::new(), |b| format!(" (camera: {b})")),
         a.envs,
         mem.map_or("n/a".into(), |m| format!("{m:.0} MiB"))
     );
@@ -91,6 +93,7 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
             "task": config.task.name,
             "robot": config.robot.name,
             "modalities": config.sensors.modalities,
+            "camera_backend": backend,
             "steps": a.steps,
             "envs": a.envs,
             "threads": threads,

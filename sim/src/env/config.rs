@@ -269,7 +269,9 @@ pub struct CameraSection {
     /// Far clipping (m); depth beyond reads 0.
     #[serde(default = "default_far")]
     pub far: f64,
-    /// `auto`, `wgpu` or `raycast`.
+    /// `auto`, `wgpu`, `raycast` or `raster`. `auto` takes `raster` when every camera
+    /// modality is geometric (depth, point cloud, normals, ids), else wgpu when an adapter
+    /// exists, else `raycast`.
     #[serde(default = "default_backend")]
     pub backend: String,
 }
@@ -626,10 +628,10 @@ impl EnvConfig {
             }
         }
         let c = &self.sensors.camera;
-        if !matches!(c.backend.as_str(), "auto" | "wgpu" | "raycast") {
+        if !matches!(c.backend.as_str(), "auto" | "wgpu" | "raycast" | "raster") {
             return Err(bad(
                 "sensors.camera.backend",
-                format!("`{}` is not auto, wgpu or raycast", c.backend),
+                format!("`{}` is not auto, wgpu, raycast or raster", c.backend),
             ));
         }
         let l = &self.sensors.lidar;

@@ -15,7 +15,8 @@ use crate::randomize::{Randomizer, Stream, add_depth_noise, perturb_pose2d, rand
 use crate::scene::{GenerateOptions, MapOptions, SceneFile, SceneMaps, generate};
 use crate::sensors::{
     Backend, Camera, CameraConfig, CameraIntrinsics, CulledRays, IgnoredHits, Lidar, LidarNoise, LidarSpec, Modality,
-    ModalitySet, OccupancyGrid, OccupancyGridSpec, RenderOptions, Scan, VisualScene, lidar_pose_in_base, model_items,
+    ModalitySet, OccupancyGrid, OccupancyGridSpec, RASTER_MODALITIES, RenderOptions, Scan, VisualScene,
+    lidar_pose_in_base, model_items,
 };
 use crate::world::{BUILDING_PREFIX, LoadedScene, ModelHandle, Snapshot, World, WorldConfig};
 
@@ -233,7 +234,12 @@ impl Env {
                 far: c.far,
             };
             intrinsics.validate()?;
-            let backend: Backend = c.backend.parse()?;
+            let mut backend: Backend = c.backend.parse()?;
+            // Depth, point clouds, normals and ids need no colour pipeline: `auto` takes the CPU
+            // rasteriser for them (same triangles as wgpu, a fraction of the cost per frame).
+            if backend == Backend::Auto && camera_set.iter().all(|m| RASTER_MODALITIES.contains(m)) {
+                backend = Backend::Raster;
+            }
             Some(Camera::new(
                 &world,
                 Some(robot),
@@ -373,6 +379,21 @@ impl Env {
     pub fn start_and_goal(&self) -> ([f64; 3], [f64; 2]) {
         let g = self.task.goal();
         (self.task.start(), [g[0], g[1]])
+    }
+
+    /// The camera backend in use (`auto` resolved: [`Backend::Raster`], [`Backend::Wgpu`] or
+    /// [`Backend::Raycast`]), or `None` without camera observations.
+    ///
+    /// ```no_run
+    /// use hearth_sim::env::{Env, EnvConfig};
+    /// use hearth_sim::sensors::Backend;
+    /// let toml = "[task]\nname = \"point_nav_random\"\n[sensors]\nmodalities = [\"task_obs\", \"depth\"]\n";
+    /// let env = Env::new(EnvConfig::from_toml(toml)?)?;
+    /// assert_eq!(env.camera_backend(), Some(Backend::Raster));
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
+    pub fn camera_backend(&self) -> Option<Backend> {
+        self.camera.as_ref().map(Camera::backend)
     }
 
     /// The task's name (`config.task.name`).
@@ -727,23 +748,38 @@ impl Env {
     }
 
     fn sense(&mut self) -> EnvResult<()> {
-        if let Some(camera) = &mut self.camera {
-            if self.camera_offset == Isometry3::identity() {
-                camera.render(&self.world, self.camera_set)?;
+        let world = &self.world;
+        let (robot, offset, set) = (self.robot, self.camera_offset, self.camera_set);
+        let render = |camera: &mut Camera| -> EnvResult<()> {
+            if offset == Isometry3::identity() {
+                camera.render(world, set)?;
             } else {
-                let pose = camera.pose(&self.world)? * self.camera_offset;
-                camera.render_from(&self.world, &pose, self.camera_set)?;
+                let pose = camera.pose(world)? * offset;
+                camera.render_from(world, &pose, set)?;
             }
-        }
-        if let Some(rig) = &mut self.lidar {
-            let base = self.world.base_pose(self.robot)?;
+            Ok(())
+        };
+        let scan = |rig: &mut LidarRig| -> EnvResult<()> {
+            let base = world.base_pose(robot)?;
             let sensor = base * rig.sensor_in_base;
             for (l, scan, culled) in rig.planar.iter_mut().chain(rig.multi.iter_mut()) {
-                l.scan_culled(culled, &rig.visuals, &self.world, &sensor, scan);
+                l.scan_culled(culled, &rig.visuals, world, &sensor, scan);
             }
             if let (Some(grid), Some((_, scan, _))) = (&mut rig.grid, &rig.planar) {
                 grid.update(scan, &rig.sensor_in_base)?;
             }
+            Ok(())
+        };
+        // The camera and the LiDARs read the world only: with both, they run side by side.
+        match (&mut self.camera, &mut self.lidar) {
+            (Some(camera), Some(rig)) => {
+                let (a, b) = rayon::join(|| render(camera), || scan(rig));
+                a?;
+                b?;
+            }
+            (Some(camera), None) => render(camera)?,
+            (None, Some(rig)) => scan(rig)?,
+            (None, None) => {}
         }
         Ok(())
     }

@@ -199,7 +199,7 @@ impl Modality {
         }
     }
 
-    fn bit(self) -> u8 {
+    const fn bit(self) -> u8 {
         1 << (self as u8)
     }
 
@@ -261,12 +261,12 @@ impl ModalitySet {
     pub const ALL: ModalitySet = ModalitySet(0xff);
 
     /// This set plus `m`.
-    pub fn with(self, m: Modality) -> Self {
+    pub const fn with(self, m: Modality) -> Self {
         Self(self.0 | m.bit())
     }
 
     /// Whether `m` is in the set.
-    pub fn contains(self, m: Modality) -> bool {
+    pub const fn contains(self, m: Modality) -> bool {
         self.0 & m.bit() != 0
     }
 
@@ -388,6 +388,7 @@ impl FromStr for Preset {
 /// ```
 /// use hearth_sim::sensors::Backend;
 /// assert_eq!("raycast".parse::<Backend>().unwrap(), Backend::Raycast);
+/// assert_eq!("raster".parse::<Backend>().unwrap(), Backend::Raster);
 /// assert!("opengl".parse::<Backend>().is_err());
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -399,6 +400,9 @@ pub enum Backend {
     Wgpu,
     /// CPU ray casting with parry; needs no graphics driver.
     Raycast,
+    /// CPU depth rasteriser ([`crate::sensors::RasterCamera`]): depth, point cloud, normals and
+    /// ids only, fastest for RL observations without colour; needs no graphics driver.
+    Raster,
 }
 
 impl Backend {
@@ -408,6 +412,7 @@ impl Backend {
             Backend::Auto => "auto",
             Backend::Wgpu => "wgpu",
             Backend::Raycast => "raycast",
+            Backend::Raster => "raster",
         }
     }
 }
@@ -420,6 +425,7 @@ impl FromStr for Backend {
             "auto" => Ok(Backend::Auto),
             "wgpu" => Ok(Backend::Wgpu),
             "raycast" => Ok(Backend::Raycast),
+            "raster" => Ok(Backend::Raster),
             _ => Err(SensorError::UnknownBackend { name: s.to_owned() }),
         }
     }

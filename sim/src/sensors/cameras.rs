@@ -1,11 +1,13 @@
-//! [`Camera`]: a camera in the world, on a robot link or free, rendered by the wgpu backend or
-//! the ray caster (chosen by [`Backend`]; `auto` takes wgpu when an adapter exists).
+//! [`Camera`]: a camera in the world, on a robot link or free, rendered by the wgpu backend,
+//! the ray caster or the CPU depth rasteriser (chosen by [`Backend`]; `auto` takes wgpu when an
+//! adapter exists).
 
 use nalgebra::Isometry3;
 
 use super::camera::{Backend, CameraIntrinsics, Frame, ModalitySet, Mount, Preset, RenderOptions};
 use super::error::{SensorError, SensorResult};
 use super::gpu::{GpuCamera, gpu_adapter};
+use super::raster::RasterCamera;
 use super::raycast::RaycastCamera;
 use super::visuals::{PbrMaterial, VisualScene};
 use crate::world::{ModelHandle, World};
@@ -50,6 +52,7 @@ impl CameraConfig {
 enum Renderer {
     Gpu(Box<GpuCamera>),
     Ray(Box<RaycastCamera>),
+    Raster(Box<RasterCamera>),
 }
 
 /// A camera reading the live world: every visual shape, posed from physics at each
@@ -147,6 +150,7 @@ impl Camera {
         };
         match config.backend {
             Backend::Raycast => ray(),
+            Backend::Raster => Ok(Renderer::Raster(Box::new(RasterCamera::new(scene, config.intrinsics)?))),
             Backend::Wgpu => gpu(),
             Backend::Auto => match gpu_adapter() {
                 Ok(_) => match gpu() {
@@ -165,11 +169,12 @@ impl Camera {
         }
     }
 
-    /// The backend in use ([`Backend::Wgpu`] or [`Backend::Raycast`]).
+    /// The backend in use ([`Backend::Wgpu`], [`Backend::Raycast`] or [`Backend::Raster`]).
     pub fn backend(&self) -> Backend {
         match self.renderer {
             Renderer::Gpu(_) => Backend::Wgpu,
             Renderer::Ray(_) => Backend::Raycast,
+            Renderer::Raster(_) => Backend::Raster,
         }
     }
 
@@ -178,6 +183,7 @@ impl Camera {
         match &self.renderer {
             Renderer::Gpu(g) => g.adapter_name(),
             Renderer::Ray(_) => "cpu ray casting",
+            Renderer::Raster(_) => "cpu rasteriser",
         }
     }
 
@@ -222,6 +228,7 @@ impl Camera {
         match &mut self.renderer {
             Renderer::Gpu(g) => g.render(&self.poses, pose, modalities, &mut self.frame)?,
             Renderer::Ray(r) => r.render(&self.poses, pose, modalities, &mut self.frame)?,
+            Renderer::Raster(r) => r.render(&self.poses, pose, modalities, &mut self.frame)?,
         }
         Ok(&self.frame)
     }
@@ -239,6 +246,16 @@ impl Camera {
         match &mut self.renderer {
             Renderer::Gpu(g) => g.set_material(item, material)?,
             Renderer::Ray(r) => r.set_material(item, material)?,
+            // Materials do not change depth or ids.
+            Renderer::Raster(_) => {
+                if item >= self.scene.items.len() {
+                    return Err(SensorError::InvalidParameter {
+                        name: "item",
+                        value: item as f64,
+                        reason: "must index a scene item",
+                    });
+                }
+            }
         }
         self.scene.items[item].material = material;
         Ok(())
@@ -249,6 +266,7 @@ impl Camera {
         match &mut self.renderer {
             Renderer::Gpu(g) => g.reset_flow(),
             Renderer::Ray(r) => r.reset_flow(),
+            Renderer::Raster(_) => {}
         }
     }
 

@@ -49,7 +49,7 @@ pub enum SensorError {
         name: String,
     },
     /// A backend name that does not exist.
-    #[error("unknown camera backend `{name}` (known: auto, wgpu, raycast)")]
+    #[error("unknown camera backend `{name}` (known: auto, wgpu, raycast, raster)")]
     UnknownBackend {
         /// Name given.
         name: String,
@@ -82,6 +82,14 @@ pub enum SensorError {
     /// The GPU device failed while rendering or reading back.
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// The camera backend cannot render this modality.
+    #[error("the {backend} camera backend does not render `{modality}` (use wgpu or raycast)")]
+    Unsupported {
+        /// The backend's name.
+        backend: &'static str,
+        /// The modality asked for.
+        modality: &'static str,
+    },
     /// A modality was read that the last frame did not produce.
     #[error("modality `{0}` was not rendered in this frame")]
     NotRendered(&'static str),

@@ -893,8 +893,10 @@ pub struct CulledRays {
 /// Slack (m) added to the reach of a sensor when culling.
 const CULL_MARGIN: f64 = 0.5;
 
-/// Slack (m) added on each side of a planar scanner's scan plane when culling.
-const PLANE_MARGIN: f64 = 0.05;
+/// Slack (m) added on each side of a planar scanner's scan plane when culling. Wide enough that
+/// a wheeled base rocking on its suspension (the plane tilting by a degree at the far end of
+/// the range) does not rebuild the copy every step.
+const PLANE_MARGIN: f64 = 0.3;
 
 /// Item-frame bounding box of a shape: (centre, half extents).
 fn local_box(shape: &super::visuals::VisualShape) -> (Vector3<f64>, Vector3<f64>) {
@@ -984,8 +986,9 @@ impl CulledRays {
             && self.built_at.is_some_and(|b| {
                 let normal = b.rotation * Vector3::z();
                 let moved = sensor.translation.vector - b.translation.vector;
-                // How far the scan plane tilts at the far end of the range.
-                let tilt = b.rotation.angle_to(&sensor.rotation) * spec.max_range;
+                // How far the scan plane tilts at the far end of the range (a turn about the
+                // plane's own normal, a yaw for a level scanner, keeps the plane).
+                let tilt = normal.angle(&(sensor.rotation * Vector3::z())) * spec.max_range;
                 moved.norm() <= CULL_MARGIN / 2.0 && (!planar || moved.dot(&normal).abs() + tilt <= PLANE_MARGIN / 2.0)
             });
         let rebuilt = !still_valid;

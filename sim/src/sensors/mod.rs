@@ -1,4 +1,5 @@
-//! Sensors: cameras (a wgpu rasteriser and a driver-free ray caster with the same modalities),
+//! Sensors: cameras (a wgpu rasteriser and a driver-free ray caster with the same modalities,
+//! and a CPU depth rasteriser for the geometric ones),
 //! 1- and 16-beam LiDAR, and local occupancy grids, all reading the live [`World`](crate::world::World).
 //!
 //! - [`CameraIntrinsics`], [`Modality`], [`Preset`], [`RenderOptions`], [`Backend`],
@@ -6,6 +7,8 @@
 //!   frames and units.
 //! - [`VisualScene`] lists every visual shape with its material, semantic class
 //!   ([`SemanticClass`]) and instance id.
+//! - [`RasterCamera`] is a CPU depth rasteriser for the geometric modalities (depth, point
+//!   cloud, normals, ids), the [`Backend::Raster`] backend.
 //! - [`RayScene`] is the ray-casting engine (parry shapes in a BVH) that the ray-cast camera
 //!   and the LiDARs share.
 //! - [`LidarSpec`], [`LidarNoise`], [`Lidar`] and the output [`Scan`] describe a LiDAR; the
@@ -19,6 +22,7 @@ mod error;
 pub mod gpu;
 pub mod lidar;
 pub mod occupancy;
+pub mod raster;
 pub mod raycast;
 pub mod save;
 pub mod shading;
@@ -33,6 +37,7 @@ pub use lidar::{
     lidar_pose_in_base, model_items,
 };
 pub use occupancy::{FREE, MAX_GRID_SIDE, OCCUPIED, OccupancyGrid, OccupancyGridSpec, UNKNOWN};
+pub use raster::{RASTER_MODALITIES, RasterCamera};
 pub use raycast::{RayHit, RayScene, RaycastCamera};
 pub use visuals::{
     Instance, PbrMaterial, SceneLight, SemanticClass, VisualItem, VisualScene, VisualShape, default_lights,

@@ -29,7 +29,7 @@
 //! linear camera-frame z written by the fragment shader, not the buffer value.
 
 mod pipeline;
-mod tessellate;
+pub(crate) mod tessellate;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
