@@ -1040,35 +1040,35 @@ impl Arm {
     /// support links on what they stand on, the held object, and `allowed` bodies.
     fn unexpected_contact(&self, world: &World, support: &[BodyId], allowed: &[BodyId]) -> SkillResult<Option<String>> {
         let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
-        for c in world.contacts(self.robot)? {
+        let mut hit = None;
+        world.for_each_contact(self.robot, |c| {
             let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
-            if on_support || held.contains(&c.other) || allowed.contains(&c.other) {
-                continue;
+            if hit.is_some() || on_support || held.contains(&c.other) || allowed.contains(&c.other) {
+                return;
             }
             if c.force.norm() > self.settings.contact_force {
-                return Ok(Some(format!(
+                hit = Some(format!(
                     "link `{}` touched `{}` ({:.1} N)",
                     c.link,
                     c.other_name,
                     c.force.norm()
-                )));
+                ));
             }
-        }
-        Ok(None)
+        })?;
+        Ok(hit)
     }
 
     /// The sum of contact forces on the arm's links (support contacts excluded), N.
     fn arm_force(&self, world: &World, support: &[BodyId]) -> SkillResult<f64> {
         let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
-        Ok(world
-            .contacts(self.robot)?
-            .into_iter()
-            .filter(|c| {
-                let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
-                !on_support && !held.contains(&c.other)
-            })
-            .map(|c| c.force.norm())
-            .sum())
+        let mut sum = 0.0;
+        world.for_each_contact(self.robot, |c| {
+            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+            if !on_support && !held.contains(&c.other) {
+                sum += c.force.norm();
+            }
+        })?;
+        Ok(sum)
     }
 
     /// The chain configurations of a straight-line move of the tip from where it is now, one

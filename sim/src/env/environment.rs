@@ -655,17 +655,17 @@ impl Env {
         };
         let own = self.task.own_objects();
         let (mut collided, mut touched) = (false, false);
-        for c in self.world.contacts(self.robot)?.iter().filter(|c| c.force.norm() > 0.0) {
-            if floor(&c.other_name) {
-                continue;
+        self.world.for_each_contact(self.robot, |c| {
+            if c.force.norm() <= 0.0 || floor(c.other_name) {
+                return;
             }
-            let model = c.other_name.split('/').next().unwrap_or(&c.other_name);
+            let model = c.other_name.split('/').next().unwrap_or(c.other_name);
             if own.iter().any(|o| o == model) {
                 touched = true;
             } else {
                 collided = true;
             }
-        }
+        })?;
         Ok((collided, touched))
     }
 

@@ -63,7 +63,7 @@ pub use control::{DiffDriveConfig, FINGER_PAD_FRICTION, GripperConfig, JointComm
 pub use error::{WorldError, WorldResult};
 pub use obstacles::WorldObstacles;
 pub use physics::{BodyId, StaticVisual, World};
-pub use readout::{ContactInfo, Twist};
+pub use readout::{ContactInfo, ContactRef, Twist};
 pub use scene_load::{
     BUILDING_PREFIX, LoadSceneError, LoadedScene, REST_ANGULAR_SPEED, REST_LINEAR_SPEED, SettleReport,
 };

@@ -57,6 +57,30 @@ pub struct ContactInfo {
     pub torque: Vector3<f64>,
 }
 
+/// One contact as [`World::for_each_contact`] hands it over: [`ContactInfo`] with borrowed
+/// names.
+///
+/// ```no_run
+/// # fn f(world: &hearth_sim::world::World, robot: hearth_sim::world::ModelHandle) {
+/// world.for_each_contact(robot, |c| println!("{} touches {} ({:.1} N)", c.link, c.other_name, c.force.norm())).unwrap();
+/// # }
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct ContactRef<'a> {
+    /// Name of the model link in contact (the main link of its body).
+    pub link: &'a str,
+    /// The other body.
+    pub other: BodyId,
+    /// Name of the other body.
+    pub other_name: &'a str,
+    /// Estimated contact force on the link (N, world frame).
+    pub force: Vector3<f64>,
+    /// A world point of the contact (the deepest one).
+    pub point: Vector3<f64>,
+    /// Moment of `force` at `point` about the origin of the link's body frame (N·m, world).
+    pub torque: Vector3<f64>,
+}
+
 impl World {
     /// Joint positions in `q` order.
     ///
@@ -202,11 +226,55 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::identity(), SpawnOptions::free())?;
+    /// for _ in 0..10 { world.step(); }
+    /// let on_ground: Vec<_> = world.contacts(robot)?.into_iter().filter(|c| c.link.contains("wheel")).collect();
+    /// assert!(!on_ground.is_empty());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn contacts(&self, handle: ModelHandle) -> WorldResult<Vec<ContactInfo>> {
+        let mut out = Vec::new();
+        self.for_each_contact(handle, |c| {
+            out.push(ContactInfo {
+                link: c.link.to_owned(),
+                other: c.other,
+                other_name: c.other_name.to_owned(),
+                force: c.force,
+                point: c.point,
+                torque: c.torque,
+            });
+        })?;
+        Ok(out)
+    }
+
+    /// Calls `f` on each contact [`World::contacts`] would list, borrowing the names instead
+    /// of copying them: for per-step checks that should not allocate.
+    ///
+    /// # Errors
+    /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::identity(), SpawnOptions::free())?;
+    /// for _ in 0..10 { world.step(); }
+    /// let mut load = 0.0;
+    /// world.for_each_contact(robot, |c| load += c.force.z)?;
+    /// assert!(load > 0.0, "the floor carries the robot");
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn for_each_contact(&self, handle: ModelHandle, mut f: impl FnMut(&ContactRef<'_>)) -> WorldResult<()> {
         let entry = self.entry(handle)?;
         let s = &self.state;
         let inv_dt = 1.0 / self.config.timestep;
-        let mut out = Vec::new();
         for &body in &entry.bodies {
             let Some(rb) = s.bodies.get(body) else { continue };
             let link = self.state.names.get(rb.user_data as usize).map_or("", String::as_str);
@@ -250,10 +318,10 @@ impl World {
                     let point = Vector3::new(point.x.into(), point.y.into(), point.z.into());
                     let origin = rb.translation();
                     let arm = point - Vector3::new(origin.x.into(), origin.y.into(), origin.z.into());
-                    out.push(ContactInfo {
-                        link: link.to_owned(),
+                    f(&ContactRef {
+                        link,
                         other: BodyId(other_body),
-                        other_name: self.body_name(BodyId(other_body)).unwrap_or("").to_owned(),
+                        other_name: self.body_name(BodyId(other_body)).unwrap_or(""),
                         force,
                         point,
                         torque: arm.cross(&force),
@@ -261,7 +329,7 @@ impl World {
                 }
             }
         }
-        Ok(out)
+        Ok(())
     }
 }
 

@@ -2,6 +2,8 @@
 //! rate (stopping and turning in place at sharp corners, a final turn to the goal yaw), with
 //! stall and contact detection; or kinematic teleporting along the plan.
 
+use std::fmt::Write as _;
+
 use hearth_kinematics::wrap_angle;
 use hearth_planning::obstacles::Obstacles;
 use hearth_planning::validity::StateValidator;
@@ -312,16 +314,18 @@ pub(crate) fn track(
             )));
         }
         if totals.steps.is_multiple_of(CONTACT_EVERY) {
-            let hit = world
-                .contacts(robot)?
-                .into_iter()
-                .find(|c| c.force.norm() > TOUCH_FORCE && support.binary_search_by_key(&key(&c.other), key).is_err());
-            match hit {
-                Some(c) => {
-                    touch += CONTACT_EVERY as f64 * dt;
-                    touched = format!("`{}` touches `{}`", c.link, c.other_name);
+            let mut hit = false;
+            world.for_each_contact(robot, |c| {
+                if !hit && c.force.norm() > TOUCH_FORCE && support.binary_search_by_key(&key(&c.other), key).is_err() {
+                    hit = true;
+                    touched.clear();
+                    let _ = write!(touched, "`{}` touches `{}`", c.link, c.other_name);
                 }
-                None => touch = 0.0,
+            })?;
+            if hit {
+                touch += CONTACT_EVERY as f64 * dt;
+            } else {
+                touch = 0.0;
             }
             // Grazing something while still getting on is no blockage.
             if touch > TOUCH_TIME && stall > TOUCH_STALL {
