@@ -123,11 +123,11 @@ fn fetch_arm_out(compensate: bool) -> (World, ModelHandle, Vec<f64>) {
         .unwrap();
     world.set_gravity_compensation(h, compensate).unwrap();
     let mut q = world.joint_positions(h).unwrap();
-    let names = fetch.variable_names().to_vec();
-    q[names.iter().position(|n| n == "torso_lift_joint").unwrap()] = 0.3;
-    for joint in ARM {
-        q[names.iter().position(|n| n == joint).unwrap()] = 0.0;
-    }
+    // The torso up, the arm stretched out level (every arm joint at zero).
+    let chain = hearth_sim::kinematics::Chain::named(&fetch, "arm_with_torso").unwrap();
+    let mut arm = vec![0.0; chain.dof()];
+    arm[0] = 0.3;
+    chain.scatter(&arm, &mut q);
     world.set_position_targets(h, &q).unwrap();
     steps(&mut world, 60);
     (world, h, q)
@@ -157,16 +157,6 @@ fn gravity_compensation_holds_an_outstretched_arm_on_target() {
     let (roll, pitch, _) = world.base_pose(h).unwrap().rotation.euler_angles();
     assert!(roll.abs() < 0.01 && pitch.abs() < 0.01, "base tilts by {roll}, {pitch}");
 }
-
-const ARM: [&str; 7] = [
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "upperarm_roll_joint",
-    "elbow_flex_joint",
-    "forearm_roll_joint",
-    "wrist_flex_joint",
-    "wrist_roll_joint",
-];
 
 fn drive_straight(robot: &str, v: f64, seconds: f64) -> (World, ModelHandle) {
     let model = RobotModel::builtin(robot).unwrap();

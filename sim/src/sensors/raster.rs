@@ -15,7 +15,7 @@ use nalgebra::Isometry3;
 
 use super::camera::{CameraIntrinsics, Frame, Modality, ModalitySet, check_render_inputs};
 use super::error::{SensorError, SensorResult};
-use super::gpu::tessellate::{ItemRange, tessellate};
+use super::gpu::tessellate::{ItemRange, cross, dot, sub, tessellate};
 use super::visuals::VisualScene;
 
 /// Item id of a pixel that sees nothing.
@@ -54,22 +54,6 @@ impl Projection {
         let iz = 1.0 / p[2];
         [self.fx * p[0] * iz + self.cx, self.fy * p[1] * iz + self.cy]
     }
-}
-
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn lerp(a: [f32; 3], b: [f32; 3], t: f32) -> [f32; 3] {
