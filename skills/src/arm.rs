@@ -71,6 +71,10 @@ pub struct ArmSettings {
     /// Distance from the tip link's origin to the fingertips along its approach axis (+x),
     /// metres: where pushes touch.
     pub tool_reach: f64,
+    /// Most waypoints handed to the jerk-limited (Ruckig) pass over a smoothed motion, evenly
+    /// spread (`None`: one per 0.2 rad). Ruckig's waypoint solver takes 0.2–1.1 s for 30–80
+    /// waypoints; fewer plan faster but follow the smoothed motion less closely.
+    pub jerk_waypoints: Option<usize>,
 }
 
 impl ArmSettings {
@@ -91,6 +95,7 @@ impl ArmSettings {
             ik_attempts: 40,
             tolerance: 0.05,
             tool_reach: 0.036,
+            jerk_waypoints: None,
         }
     }
 }
@@ -755,7 +760,10 @@ impl Arm {
         let goal = smoothed.path.states.last().cloned().unwrap_or(start);
         // Jerk-limited execution through waypoints of the smoothed motion; it may cut corners,
         // so it is kept only if it stays collision-free.
-        let waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+        let mut waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+        if let Some(max) = self.settings.jerk_waypoints {
+            thin_waypoints(&mut waypoints.states, max);
+        }
         let (trajectory, jerk_limited) = match Trajectory::jerk_limited(&self.space, &waypoints, &self.limits) {
             Ok(j)
                 if j.check(&self.space, &mut validity, self.settings.resolution / 10.0)
@@ -1332,6 +1340,25 @@ impl Arm {
     }
 }
 
+/// Keeps at most `max` (at least 2) of `states`, evenly spread, always the first and the last.
+fn thin_waypoints(states: &mut Vec<Vec<f64>>, max: usize) {
+    let max = max.max(2);
+    let n = states.len();
+    if n <= max {
+        return;
+    }
+    // Index of the k-th kept state, rounded: 0 first, n - 1 last, strictly increasing.
+    let kept = |k: usize| (k * (n - 1) + (max - 1) / 2) / (max - 1);
+    let mut k = 0;
+    let mut i = 0;
+    states.retain(|_| {
+        let keep = k < max && kept(k) == i;
+        k += usize::from(keep);
+        i += 1;
+        keep
+    });
+}
+
 /// A tip orientation whose approach axis (+x) points along `approach` and whose +z is as close
 /// to world up as possible (world +x when `approach` is vertical), turned by `roll` about the
 /// approach axis.
@@ -1380,4 +1407,26 @@ fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {
 /// ```
 pub fn plan_path(arm: &Arm, plan: &ArmPlan, resolution: f64) -> Path {
     plan.trajectory.to_path(&arm.space, resolution)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::thin_waypoints;
+
+    #[test]
+    fn thinning_keeps_the_ends_and_spreads_the_rest() {
+        let states: Vec<Vec<f64>> = (0..50).map(|i| vec![f64::from(i)]).collect();
+        let mut thin = states.clone();
+        thin_waypoints(&mut thin, 16);
+        assert_eq!(thin.len(), 16);
+        assert_eq!(thin[0], states[0]);
+        assert_eq!(thin[15], states[49]);
+        assert!(thin.windows(2).all(|w| w[1][0] > w[0][0] && w[1][0] - w[0][0] <= 4.0));
+        let mut short = states[..10].to_vec();
+        thin_waypoints(&mut short, 16);
+        assert_eq!(short.len(), 10, "fewer than the cap are kept as they are");
+        let mut two = states.clone();
+        thin_waypoints(&mut two, 0);
+        assert_eq!(two, vec![states[0].clone(), states[49].clone()]);
+    }
 }
