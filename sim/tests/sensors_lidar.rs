@@ -490,6 +490,16 @@ fn a_fetch_in_a_generated_home_scans_from_its_laser_link() {
     ));
 }
 
+/// A culled scan reads what the full scan reads at step `k`: the same hits and items, ranges
+/// within 0.1 mm.
+fn assert_same_scan(k: usize, a: &Scan, b: &Scan) {
+    assert_eq!(a.hit, b.hit, "step {k}");
+    assert_eq!(a.items, b.items, "step {k}");
+    for (x, y) in a.ranges.iter().zip(&b.ranges) {
+        assert!((x - y).abs() < 1e-4, "step {k}: {x} vs {y}");
+    }
+}
+
 #[test]
 fn culled_scans_match_full_scans_as_the_robot_moves() {
     let (world, _, fetch) = fetch_home();
@@ -513,11 +523,7 @@ fn culled_scans_match_full_scans_as_the_robot_moves() {
             rays.update(&visuals, &world);
             lidar.scan(&rays, &pose, &mut a);
             lidar.scan_culled(&mut culled, &visuals, &world, &pose, &mut b);
-            assert_eq!(a.hit, b.hit, "step {k}");
-            assert_eq!(a.items, b.items, "step {k}");
-            for (x, y) in a.ranges.iter().zip(&b.ranges) {
-                assert!((x - y).abs() < 1e-4, "step {k}: {x} vs {y}");
-            }
+            assert_same_scan(k, &a, &b);
         }
         assert!(culled.len() < visuals.items.len());
         // Small moves reuse the copy; the jumps rebuild it.
@@ -546,11 +552,7 @@ fn turning_in_place_keeps_the_culled_copy_and_matches_full_scans() {
         let pose = start * nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3 * k as f64);
         lidar.scan(&rays, &pose, &mut a);
         lidar.scan_culled(&mut culled, &visuals, &world, &pose, &mut b);
-        assert_eq!(a.hit, b.hit, "step {k}");
-        assert_eq!(a.items, b.items, "step {k}");
-        for (x, y) in a.ranges.iter().zip(&b.ranges) {
-            assert!((x - y).abs() < 1e-4, "step {k}: {x} vs {y}");
-        }
+        assert_same_scan(k, &a, &b);
     }
     assert_eq!(culled.rebuilds(), 1);
     // Tilting the plane does rebuild it.

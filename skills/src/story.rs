@@ -660,7 +660,7 @@ fn story_stages(
             }
         };
         r.sample("open_drawer")?;
-        stow(r, &mut arm, exec, cabinet, &mut rng)?;
+        stow(r, &nav, &mut arm, exec, cabinet, &mut rng)?;
         Ok((
             (),
             format!(
@@ -826,13 +826,13 @@ fn restand(
     near: ModelHandle,
     rng: &mut Pcg64Mcg,
 ) -> SkillResult<[f64; 3]> {
-    stow(run, arm, exec, near, rng)?;
-    let fresh = spots.filter(|g| tried.iter().all(|t| (t[0] - g[0]).hypot(t[1] - g[1]) > 0.1));
     // What the gripper holds travels with the base: no obstacle to it.
     let nav = Navigator::new(NavigateSettings {
         carried: arm.held().map(|h| h.bodies.clone()).unwrap_or_default(),
         ..nav.settings().clone()
     })?;
+    stow(run, &nav, arm, exec, near, rng)?;
+    let fresh = spots.filter(|g| tried.iter().all(|t| (t[0] - g[0]).hypot(t[1] - g[1]) > 0.1));
     let goal = reachable(&nav, run, maps, fresh, rng)?;
     nav.navigate(&mut run.world, run.robot, maps, goal, rng)?;
     run.come_to_rest(exec)?;
@@ -841,16 +841,19 @@ fn restand(
 
 /// Backs the gripper off what it touched and brings the arm in; when the arm is caught (a
 /// brush against furniture, a plan that cannot start), once more, then once more after
-/// backing the base off 10 cm.
-fn stow(run: &mut Run, arm: &mut Arm, exec: Execution, near: ModelHandle, rng: &mut Pcg64Mcg) -> SkillResult<()> {
+/// backing the base off 10 cm where that is free.
+fn stow(
+    run: &mut Run,
+    nav: &Navigator,
+    arm: &mut Arm,
+    exec: Execution,
+    near: ModelHandle,
+    rng: &mut Pcg64Mcg,
+) -> SkillResult<()> {
     let mut last = None;
     for attempt in 0..3 {
         if attempt == 2 {
-            run.world.drive(run.robot, -0.1, 0.0)?;
-            let dt = run.world.config().control_dt();
-            for _ in 0..(1.0 / dt).ceil() as usize {
-                run.world.step();
-            }
+            nav.back_off(&mut run.world, run.robot, 0.1)?;
             run.come_to_rest(exec)?;
         }
         match clear_of(run, arm, exec).and_then(|_| tuck_arm(run, arm, exec, near, rng)) {

@@ -319,6 +319,38 @@ impl Navigator {
         plan::plan_path(world, robot, maps, start, goal, &footprint, &self.settings, rng)
     }
 
+    /// Backs the base straight up by `distance` metres where its footprint is free behind it,
+    /// else drives it forward by that much where that is free, else leaves it (the recovery
+    /// [`Navigator::navigate`] uses before a replan).
+    ///
+    /// # Errors
+    /// [`SkillError::BadInput`] for a robot without a known footprint or a bad distance;
+    /// [`SkillError::World`].
+    ///
+    /// ```no_run
+    /// # fn f(world: &mut hearth_sim::world::World, robot: hearth_sim::world::ModelHandle) {
+    /// use hearth_skills::navigate::{NavigateSettings, Navigator};
+    /// let nav = Navigator::new(NavigateSettings::default()).unwrap();
+    /// nav.back_off(world, robot, 0.1).unwrap();
+    /// # }
+    /// ```
+    pub fn back_off(&self, world: &mut World, robot: ModelHandle, distance: f64) -> SkillResult<()> {
+        if !(distance.is_finite() && distance > 0.0) {
+            return Err(SkillError::BadInput(format!(
+                "back-off distance {distance} must be positive"
+            )));
+        }
+        let footprint = self.footprint(world, robot)?;
+        track::back_off(
+            world,
+            robot,
+            &footprint,
+            &self.settings,
+            distance,
+            &mut Totals::default(),
+        )
+    }
+
     /// Plans and executes: drives (or teleports) the base to `goal` (`[x, y, yaw]`).
     ///
     /// # Errors
