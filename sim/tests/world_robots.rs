@@ -68,6 +68,32 @@ fn mimic_finger_follows_its_leader() {
     assert!((l.translation.vector - r.translation.vector).norm() < 5e-3);
 }
 
+#[test]
+fn gripper_fingers_move_at_their_velocity_limit() {
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let mut world = world();
+    let robot = world
+        .spawn_model(&fetch, &Isometry3::identity(), SpawnOptions::fixed())
+        .unwrap();
+    let finger = fetch
+        .variable_names()
+        .iter()
+        .position(|n| n == "r_gripper_finger_joint")
+        .unwrap();
+    world.gripper_open(robot).unwrap();
+    steps(&mut world, 45); // 1.5 s: 5 cm at 5 cm/s
+    let open = world.joint_positions(robot).unwrap()[finger];
+    assert!(open > 0.049, "open: {open}");
+    world.gripper_close(robot, 40.0).unwrap();
+    steps(&mut world, 15); // 0.5 s
+    let half = world.joint_positions(robot).unwrap()[finger];
+    assert!((half - 0.025).abs() < 0.004, "after 0.5 s at 5 cm/s: {half}");
+    // Nothing slows it on the way or puts it to sleep before it gets there.
+    steps(&mut world, 30);
+    let closed = world.joint_positions(robot).unwrap()[finger];
+    assert!(closed < 0.002, "closed: {closed}");
+}
+
 const DRAWER: &str = r#"<?xml version="1.0"?>
 <robot name="drawer">
   <link name="cabinet">

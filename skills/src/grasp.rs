@@ -8,6 +8,14 @@
 //! (no lower than the palm allows above its support), **top grasps** approach from above with
 //! the fingers across the object at several yaws. A candidate needs the object to be narrower
 //! than the gripper opening across its fingers.
+//!
+//! An open vessel wider than the opening (a bowl) is taken by its **rim**: rays cast straight
+//! down onto the object's shape along a line from its axis outwards find the wall (where the
+//! rays hit the top), its thickness, and the depth of the inside next to it. When the wall is
+//! thin enough for the fingers and the inside deep enough for the inner finger, the gripper
+//! comes down with one finger inside and one outside, the finger axis along the line, and
+//! pinches the wall's upper part. Rim grasps are tried nearest the robot first, then around
+//! the rim.
 
 use hearth_kinematics::to_pose;
 use hearth_sim::world::{BodyId, GripperConfig, ModelHandle, World, WorldError};
@@ -29,6 +37,9 @@ pub enum GraspKind {
     Side,
     /// From above, gripper pointing down.
     Top,
+    /// From above at the rim of an open vessel (a bowl, a pot) too wide for the gripper:
+    /// one finger inside, one outside, pinching the wall.
+    Rim,
 }
 
 /// One way to grasp an object.
@@ -41,7 +52,7 @@ pub enum GraspKind {
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct GraspCandidate {
-    /// Side or top.
+    /// Side, top or rim.
     pub kind: GraspKind,
     /// The tip link's world pose when grasping.
     pub pose: Isometry3<f64>,
@@ -81,6 +92,8 @@ pub struct GraspSettings {
     pub side: bool,
     /// Consider top grasps.
     pub top: bool,
+    /// Consider rim grasps (open vessels whose wall the fingers can pinch).
+    pub rim: bool,
     /// Grasps computed again at most this often when the object is nudged on the way.
     pub attempts: usize,
     /// Plan the approach only, execute nothing.
@@ -101,6 +114,7 @@ impl Default for GraspSettings {
             speed: 0.08,
             side: true,
             top: true,
+            rim: true,
             attempts: 3,
             dry_run: false,
         }
@@ -157,7 +171,8 @@ fn extents_in(
 
 /// Grasp candidates for `object`, best first: level side grasps from the direction of `from`
 /// (the robot's base position) and 30° and 60° either side of it, top grasps at four yaws
-/// (narrowest first), then the side grasps tilted 45° downwards.
+/// (narrowest first), then the side grasps tilted 45° downwards, then rim grasps (open
+/// vessels only) around the rim from the side facing `from`.
 ///
 /// # Errors
 /// [`SkillError::BadInput`] for an object without collision geometry or bad settings;
@@ -252,7 +267,128 @@ pub fn grasp_candidates(
     if settings.side {
         side(std::f64::consts::FRAC_PI_4, &mut out)?;
     }
+    if settings.rim {
+        rim_candidates(&shape, &pose, (&lo, &hi), from, settings, &mut out)?;
+    }
     Ok(out)
+}
+
+/// Step of the downward ray probes along a line from the object's axis, metres.
+const RIM_PROBE_STEP: f64 = 0.002;
+/// Offset of the probes from multiples of the step, in steps.
+const RIM_PROBE_OFFSET: f64 = 0.37;
+/// Room the open inner finger needs inside the wall beyond its pad: its thickness and a margin.
+const INNER_FINGER_ROOM: f64 = 0.02;
+/// Least length of wall between the pads, metres.
+const RIM_MIN_PINCH: f64 = 0.015;
+
+/// Length of wall between the pads that carries a rim grasp's tipping moment, metres.
+const RIM_PINCH: f64 = 0.03;
+/// Least squeeze of a rim grasp, N.
+const RIM_MIN_FORCE: f64 = 10.0;
+
+/// The squeeze of a rim grasp: 1.5 times what holds the vessel level against the moment of
+/// its weight about the grasp (its centre hangs off to the side), at most `max`. No more
+/// than that: the contacts are soft, so a hard squeeze sinks the pads into a light vessel's
+/// thin wall and lets it tip.
+fn rim_force(
+    world: &World,
+    object: ModelHandle,
+    bodies: &[BodyId],
+    candidate: &GraspCandidate,
+    max: f64,
+) -> SkillResult<f64> {
+    let mass = bodies.iter().map(|&b| world.body_mass(b)).sum::<Result<f64, _>>()?;
+    let lever = (world.base_pose(object)?.translation.vector - candidate.pose.translation.vector)
+        .xy()
+        .norm();
+    let moment = mass * 9.81 * lever;
+    Ok((1.5 * moment / RIM_PINCH).clamp(RIM_MIN_FORCE.min(max), max))
+}
+
+/// Rim grasps of an open vessel (see the [module docs](self)), pushed onto `out` in order
+/// around the rim starting from the side facing `from`.
+fn rim_candidates(
+    shape: &hearth_kinematics::parry3d::shape::SharedShape,
+    pose: &Isometry3<f64>,
+    (lo, hi): (&Vector3<f64>, &Vector3<f64>),
+    from: &Point3<f64>,
+    settings: &GraspSettings,
+    out: &mut Vec<GraspCandidate>,
+) -> SkillResult<()> {
+    use hearth_kinematics::parry3d::math::Vector as V;
+    use hearth_kinematics::parry3d::query::Ray;
+    let centre = (lo + hi) / 2.0;
+    let top = hi.z;
+    let reach = 0.5 * (hi.xy() - lo.xy()).norm() + 0.01;
+    let parry_pose = to_pose(pose);
+    let above = top + 0.05;
+    let max_toi = (above - lo.z + 0.05) as f32;
+    // Height of the object's surface below (x, y), if any.
+    let surface = |x: f64, y: f64| -> Option<f64> {
+        let ray = Ray::new(V::new(x as f32, y as f32, above as f32), V::new(0.0, 0.0, -1.0));
+        shape
+            .cast_ray(&parry_pose, &ray, max_toi, true)
+            .map(|t| above - t as f64)
+    };
+    let towards = Vector3::new(from.x - centre.x, from.y - centre.y, 0.0);
+    let heading = if towards.norm() > 1e-6 {
+        towards.y.atan2(towards.x)
+    } else {
+        0.0
+    };
+    let steps = (reach / RIM_PROBE_STEP).ceil() as usize;
+    for offset in [0.0_f64, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0] {
+        let phi = heading + offset.to_radians();
+        let d = Vector3::new(phi.cos(), phi.sin(), 0.0);
+        let at = |s: f64| surface(centre.x + s * d.x, centre.y + s * d.y);
+        // Probe i lies at (i + PROBE_OFFSET) steps from the axis: off the round numbers at
+        // which a ray could graze a face of the shape.
+        let probe = |i: f64| (i + RIM_PROBE_OFFSET) * RIM_PROBE_STEP;
+        // From outside inwards: the first surface must be the top (the wall's upper edge).
+        let Some(outer) = (0..=steps).rev().find(|&i| at(probe(i as f64)).is_some()) else {
+            continue;
+        };
+        let is_top = |i: usize| at(probe(i as f64)).is_some_and(|z| z >= top - 0.01);
+        if !is_top(outer) {
+            continue;
+        }
+        let mut inner = outer;
+        while inner > 0 && is_top(inner - 1) {
+            inner -= 1;
+        }
+        let (s_out, s_in) = (probe(outer as f64 + 0.5), probe(inner as f64 - 0.5));
+        let wall = s_out - s_in;
+        if inner == 0 || wall + 0.01 > settings.max_width {
+            continue;
+        }
+        let mid = 0.5 * (s_out + s_in);
+        // The inner finger's pad and body, open, lie up to this far in from the wall's middle.
+        let room = 0.5 * settings.max_width + INNER_FINGER_ROOM;
+        // Highest surface there (past the axis too: the far wall of a narrow vessel counts).
+        let floor = (1..)
+            .map(|k| probe(inner as f64 - k as f64))
+            .take_while(|&s| s > mid - room)
+            .map(|s| at(s).unwrap_or(lo.z))
+            .fold(lo.z, f64::max);
+        // Pads over the wall's upper part, fingertips clear of the inside's floor and of the
+        // support outside.
+        let z = (top - 0.01)
+            .max(floor + settings.finger_reach + 0.008)
+            .max(lo.z + settings.finger_reach + 0.005);
+        if z - settings.finger_reach > top - RIM_MIN_PINCH || z > top {
+            continue;
+        }
+        let rotation = approach_rotation(&-Vector3::z(), std::f64::consts::FRAC_PI_2 - phi)?;
+        let p = centre + d * mid;
+        out.push(GraspCandidate {
+            kind: GraspKind::Rim,
+            pose: Isometry3::from_parts(Translation3::new(p.x, p.y, z), rotation),
+            approach: -Vector3::z(),
+            width: wall,
+        });
+    }
+    Ok(())
 }
 
 /// Grasps `object` with `arm`'s gripper and lifts it (see the [module docs](self)).
@@ -372,7 +508,11 @@ pub fn grasp<R: Rng + ?Sized>(
             settings.attempts
         ))
     })?;
-    world.gripper_close(arm.robot(), settings.force)?;
+    let force = match report.candidate.kind {
+        GraspKind::Rim => rim_force(world, object, &bodies, &report.candidate, settings.force)?,
+        GraspKind::Side | GraspKind::Top => settings.force,
+    };
+    world.gripper_close(arm.robot(), force)?;
     let dt = world.config().control_dt();
     for _ in 0..(1.2 / dt).ceil() as usize {
         world.step();

@@ -1,6 +1,6 @@
 //! The scripted mobile-manipulation story: in a generated home, the Fetch drives to the
 //! kitchen, pulls a drawer of a bottom cabinet open, drives to the sink counter, picks up the
-//! dish standing on the worktop beside the sink and puts it into the sink's basin.
+//! bowl standing on the worktop beside the sink and puts it into the sink's basin.
 //!
 //! [`run_story`] generates the home ([`generate`]) and runs the stages in order; the first
 //! stage that fails ends the story, and the [`StoryReport`] names it with the
@@ -9,10 +9,10 @@
 //! positions are sampled after every skill call (the trajectory, written as JSON).
 //!
 //! Set-up (part of the scenario, done on the scene before it is loaded): the bottom cabinet
-//! with drawers nearest the sink counter is the one opened (its highest drawer), and a dish
-//! (a cup: every bowl of the asset library is at least 14 cm across, wider than the Fetch's
-//! 94 mm gripper opening) is stood on the worktop next to the sink, the worktop cleared of the
-//! generator's small objects; the kitchen's dining table and chairs are cleared away (they
+//! with drawers nearest the sink counter is the one opened (its highest drawer), and a bowl
+//! (the library's small one, 14 cm across: wider than the Fetch's 94 mm gripper opening, so
+//! it is taken by its rim) is stood on the worktop next to the sink, the worktop cleared of
+//! the generator's small objects; the kitchen's dining table and chairs are cleared away (they
 //! often stand where the robot has to stand). A home without a kitchen counter or without a
 //! cabinet with drawers in its kitchen fails the `setup` stage.
 //!
@@ -274,10 +274,10 @@ fn cast(scene: &mut SceneFile) -> SkillResult<Cast> {
         })
         .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
         .ok_or_else(|| SkillError::Unreachable(format!("no worktop beside the sink of `{}`", counter.name)))?;
-    // Towards the front, 8 cm in from the hole's edge; the robot stands between it and the
-    // basin's middle (about 28 cm beyond the edge).
+    // The bowl (14 cm across) towards the front, its rim 2 cm from the hole's edge; the robot
+    // stands between it and the basin's middle (about 28 cm beyond the edge).
     let x = piece.max[0] - 0.1;
-    let y = edge - towards * 0.08;
+    let y = edge - towards * 0.09;
     let stand_side = edge + towards * 0.1;
     let p = counter.pose() * Point3::new(x, y, piece.z);
     scene.objects.retain(|o| o.on.as_deref() != Some(counter.name.as_str()));
@@ -293,15 +293,11 @@ fn cast(scene: &mut SceneFile) -> SkillResult<Cast> {
         .objects
         .retain(|o| !dining.contains(&o.name) && !o.on.as_ref().is_some_and(|s| dining.contains(s)));
     let dish = "story_dish".to_owned();
-    let mut mug = SceneObject::new(&dish, "mug", 0, [p.x, p.y, p.z]);
-    // Its handle (+y) pointing away from where the robot will stand: a side grasp closes
-    // across the mug's body.
-    let away = (y - stand_side).atan2(x - COUNTER_STANDS[0].0);
-    mug.orientation =
-        hearth_sim::scene::Orientation::Yaw(counter.orientation.yaw() + away - std::f64::consts::FRAC_PI_2);
-    mug.on = Some(counter.name.clone());
-    mug.room = counter.room.clone();
-    scene.objects.push(mug);
+    let mut bowl = SceneObject::new(&dish, "bowl", 0, [p.x, p.y, p.z]);
+    bowl.orientation = counter.orientation;
+    bowl.on = Some(counter.name.clone());
+    bowl.room = counter.room.clone();
+    scene.objects.push(bowl);
     Ok(Cast {
         cabinets,
         stand_side,
@@ -689,9 +685,7 @@ fn story_stages(
         ))
     })?;
     run.stage("grasp_dish", |r| {
-        // From above: the cup is too short for a level grasp to hold more than its rim
-        // (the palm must clear the worktop), and a cup held from above goes straight down
-        // into the basin.
+        // The bowl is wider than the gripper opens: it is taken by its rim, from above.
         let top = GraspSettings {
             side: false,
             ..Default::default()
@@ -708,7 +702,7 @@ fn story_stages(
             .filter(|t| t.z > 0.3 && t.z < worktop - 0.1)
             .min_by(|a, b| a.z.total_cmp(&b.z))
             .ok_or_else(|| SkillError::Unreachable(format!("no sink basin in `{}`", cast.counter.name)))?;
-        // Set down on the basin's floor, or failing that let go 8 cm above it (the cup drops
+        // Set down on the basin's floor, or failing that let go 8 cm above it (the bowl drops
         // into the basin); no placement within reach from here: the same from another spot.
         let mut stands = vec![sink_stand];
         let mut drop = false;

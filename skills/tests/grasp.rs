@@ -1,4 +1,5 @@
-//! Grasping: a Fetch lifts a mug from a table; candidates from geometry; typed failures.
+//! Grasping: a Fetch lifts a mug from a table, and a wide bowl by its rim; candidates from
+//! geometry; typed failures.
 
 use hearth_sim::assets::{Asset, Category};
 use hearth_sim::kinematics::RobotModel;
@@ -57,12 +58,78 @@ fn candidates_fit_the_object() {
     }
     // The first side grasp comes from the robot's side.
     assert!(c[0].approach.x > 0.99, "{:?}", c[0]);
-    // The large bowl (22 cm) fits no way.
+    // The large bowl (22 cm) fits no way across the fingers...
+    let no_rim = GraspSettings {
+        rim: false,
+        ..s.clone()
+    };
     assert!(
-        grasp_candidates(&world, bowl, &Point3::origin(), &s)
+        grasp_candidates(&world, bowl, &Point3::origin(), &no_rim)
             .unwrap()
             .is_empty()
     );
+    // ...but its 5 mm wall does: rim grasps all around, the nearest to the robot first.
+    let c = grasp_candidates(&world, bowl, &Point3::origin(), &s).unwrap();
+    assert_eq!(c.len(), 8, "{c:?}");
+    let bowl_at = world.base_pose(bowl).unwrap().translation.vector;
+    let rim_top = bowl_at.z + 0.07;
+    for g in &c {
+        assert_eq!(g.kind, GraspKind::Rim);
+        // Measured by probes 2 mm apart.
+        assert!((g.width - 0.005).abs() <= 0.0015, "wall {:.4}", g.width);
+        let out = g.pose.translation.vector - bowl_at;
+        // On the wall's middle (16 staves: between 0.1075 and 0.1096 m from the axis)...
+        let r = out.xy().norm();
+        assert!((0.104..=0.111).contains(&r), "{r:.4} m from the axis");
+        // ...pointing down, the fingers closing along the radius...
+        assert!((g.approach + nalgebra::Vector3::z()).norm() < 1e-9);
+        let fingers = g.pose.rotation * nalgebra::Vector3::y();
+        assert!(
+            fingers.dot(&out.xy().push(0.0).normalize()).abs() > 0.999,
+            "{fingers:?}"
+        );
+        // ...the pads over the wall's top 1.5 cm at least, their tips above the bottom.
+        assert!(g.pose.translation.z < rim_top + 1e-6);
+        assert!(g.pose.translation.z - s.finger_reach > bowl_at.z + 0.005);
+        assert!(g.pose.translation.z - s.finger_reach < rim_top - 0.015);
+    }
+    let first = c[0].pose.translation.vector - bowl_at;
+    assert!(first.x < -0.1, "the first rim grasp is on the far side: {first:?}");
+    // A solid cylinder has no rim.
+    assert!(
+        grasp_candidates(&world, mug, &Point3::origin(), &s)
+            .unwrap()
+            .iter()
+            .all(|g| g.kind != GraspKind::Rim)
+    );
+}
+
+#[test]
+fn the_fetch_lifts_a_wide_bowl_by_its_rim() {
+    let (mut world, robot, _, bowl) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+    let z0 = world.base_pose(bowl).unwrap().translation.z;
+    let r = grasp(
+        &mut world,
+        &mut arm,
+        bowl,
+        &GraspSettings::default(),
+        Execution::Physics,
+        &mut rng,
+    )
+    .unwrap();
+    assert_eq!(r.candidate.kind, GraspKind::Rim);
+    assert!(r.lifted > 0.07, "{r:?}");
+    for _ in 0..30 {
+        world.step();
+    }
+    let pose = world.base_pose(bowl).unwrap();
+    assert!(pose.translation.z > z0 + 0.07, "the bowl slipped");
+    // Held by one side, it hangs nearly level.
+    let up = pose.rotation * nalgebra::Vector3::z();
+    assert!(up.z > 0.95, "the bowl tilts {:.2} rad", up.z.acos());
+    assert_eq!(arm.held().map(|h| h.object), Some(bowl));
 }
 
 #[test]
@@ -117,15 +184,11 @@ fn too_wide_objects_and_bad_settings_are_typed_errors() {
     let (mut world, robot, mug, bowl) = table_scene();
     let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
-    let e = grasp(
-        &mut world,
-        &mut arm,
-        bowl,
-        &GraspSettings::default(),
-        Execution::Physics,
-        &mut rng,
-    )
-    .unwrap_err();
+    let across_only = GraspSettings {
+        rim: false,
+        ..Default::default()
+    };
+    let e = grasp(&mut world, &mut arm, bowl, &across_only, Execution::Physics, &mut rng).unwrap_err();
     assert_eq!(e.reason(), "unreachable", "{e}");
     let bad = GraspSettings {
         force: -1.0,

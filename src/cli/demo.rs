@@ -75,7 +75,7 @@ pub fn run(a: DemoArgs) -> anyhow::Result<()> {
 fn single(a: &DemoArgs) -> anyhow::Result<()> {
     let mode = if a.kinematic { "kinematic" } else { "physics" };
     println!(
-        "Hearth demo: a Fetch in a generated home (seed {}, {} rooms, {mode} execution) opens a kitchen drawer\nand puts a cup from the worktop into the sink.\n",
+        "Hearth demo: a Fetch in a generated home (seed {}, {} rooms, {mode} execution) opens a kitchen drawer\nand puts a bowl from the worktop into the sink.\n",
         a.seed, a.rooms
     );
     let r = run_story(&options(a, a.seed, Some(a.out.clone())));

@@ -3,11 +3,27 @@
 use super::Material;
 use super::writer::{JointFeel, Motion, Part, UrdfWriter};
 
-/// Bowl: small, medium, large (a solid of revolution approximated by a cylinder, mostly hollow).
+/// Bowl: small, medium, large. A hollow shell: a 4 mm bottom and a 5 mm wall of 16 staves
+/// (a 16-sided solid of revolution), so that its inside is empty for the physics and a
+/// gripper narrower than the bowl can pinch its rim.
 pub(crate) fn bowl(w: &mut UrdfWriter, v: usize, m: Material) {
     let (r, h) = [(0.07, 0.05), (0.09, 0.06), (0.11, 0.07)][v];
+    let (wall, bottom) = (0.005, 0.004);
     let b = w.base();
-    w.add(b, Part::cylinder(r, h, [0.0, 0.0, h / 2.0], m).fill(0.12));
+    w.add(b, Part::cylinder(r - wall, bottom, [0.0, 0.0, bottom / 2.0], m));
+    const STAVES: usize = 16;
+    let half_angle = std::f64::consts::PI / STAVES as f64;
+    // Each stave touches the circle of radius r with its outer face and meets its
+    // neighbours at the inner face.
+    let chord = 2.0 * r * half_angle.tan();
+    for k in 0..STAVES {
+        let a = 2.0 * half_angle * k as f64;
+        let c = r - wall / 2.0;
+        w.add(
+            b,
+            Part::cuboid([wall, chord, h], [c * a.cos(), c * a.sin(), h / 2.0], m).yawed(a),
+        );
+    }
 }
 
 /// Mug: espresso cup, mug, large mug; with a handle on +y.

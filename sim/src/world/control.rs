@@ -97,6 +97,16 @@ impl JointGains {
     }
 }
 
+/// Finger speed of a gripper, m/s: the finger joint's velocity limit, or 0.1 m/s where the
+/// model gives none.
+fn gripper_speed(velocity_limit: f64) -> f64 {
+    if velocity_limit.is_finite() && velocity_limit > 0.0 {
+        velocity_limit
+    } else {
+        0.1
+    }
+}
+
 /// Default gains for a joint with effective inertia `m_eff` and effort limit `effort`.
 pub(crate) fn default_gains(m_eff: f64, effort: f64) -> JointGains {
     let (stiffness, velocity_gain) = if effort.is_finite() {
@@ -298,15 +308,57 @@ impl GripperConfig {
             check_range("gripper closed position", joint, self.closed[i], lo, hi)?;
             vars.push(v);
         }
-        Ok(Gripper { config: self, vars })
+        let speed = vars
+            .iter()
+            .map(|&v| gripper_speed(model.velocity_limits()[v]))
+            .collect();
+        let ramp = vec![None; vars.len()];
+        Ok(Gripper {
+            config: self,
+            vars,
+            speed,
+            ramp,
+        })
     }
 }
 
 /// A gripper resolved against its model.
+///
+/// A real parallel gripper moves its fingers at a set speed and squeezes with at most the set
+/// force once they stall on something. Its finger joints are position controlled with the
+/// force as effort limit, and their motor targets move towards the commanded position at the
+/// finger's speed (`ramp`, once the gripper has been commanded) instead of jumping there: a
+/// target at the far end would slam the fingers shut at the effort limit and push them
+/// through thin walls.
 #[derive(Clone, Debug)]
 pub(crate) struct Gripper {
     pub(crate) config: GripperConfig,
     pub(crate) vars: Vec<usize>,
+    /// Finger speed per var, m/s or rad/s.
+    pub(crate) speed: Vec<f64>,
+    /// Motor target per var on its way to the commanded position; `None` until the gripper
+    /// is first commanded (the command is then the target).
+    pub(crate) ramp: Vec<Option<f64>>,
+}
+
+impl Gripper {
+    /// The motor target of variable `v` for a position command `target`.
+    pub(crate) fn motor_target(&self, v: usize, target: f64) -> f64 {
+        match self.vars.iter().position(|&x| x == v) {
+            Some(i) => self.ramp[i].unwrap_or(target),
+            None => target,
+        }
+    }
+
+    /// Moves the ramped targets towards the position commands by one physics step `dt`.
+    fn advance(&mut self, commands: &[JointCommand], dt: f64) {
+        for (i, &v) in self.vars.iter().enumerate() {
+            if let (Some(r), JointCommand::Position { target }) = (self.ramp[i].as_mut(), commands[v]) {
+                let step = self.speed[i] * dt;
+                *r += (target - *r).clamp(-step, step);
+            }
+        }
+    }
 }
 
 impl World {
@@ -557,7 +609,8 @@ impl World {
         Ok(())
     }
 
-    /// Opens the gripper (position targets at the open positions, full effort).
+    /// Opens the gripper: the fingers move apart at their velocity limit (their position
+    /// targets move at that speed), with full effort, until they reach the open positions.
     ///
     /// # Errors
     /// [`WorldError::NoController`] without a gripper.
@@ -566,7 +619,9 @@ impl World {
         self.gripper_command(handle, true, effort)
     }
 
-    /// Closes the gripper, squeezing with at most `force` (N) per finger joint.
+    /// Closes the gripper: the fingers move together at their velocity limit (their position
+    /// targets move at that speed towards the closed positions) and, once they stall on an
+    /// object, squeeze it with at most `force` (N) per finger joint.
     ///
     /// # Errors
     /// [`WorldError::NoController`] without a gripper; a force that is NaN, not positive or
@@ -621,6 +676,13 @@ impl World {
             entry.commands[v] = JointCommand::Position { target };
             entry.gains[v].max_effort = force.min(limit);
         }
+        // The fingers' targets move from where the fingers are now (see `Gripper::ramp`).
+        let q = self.joint_positions(handle)?;
+        if let Some(g) = self.state.models[handle.index()].gripper.as_mut() {
+            for (i, &v) in g.vars.iter().enumerate() {
+                g.ramp[i] = Some(q[v]);
+            }
+        }
         for &v in &gripper.vars {
             self.write_motor(handle, v);
         }
@@ -647,7 +709,12 @@ impl World {
     pub(crate) fn write_motor(&mut self, handle: ModelHandle, v: usize) {
         let entry = &self.state.models[handle.index()];
         let Some(slot) = entry.slot(v) else { return };
-        let command = entry.commands[v];
+        let command = match entry.commands[v] {
+            JointCommand::Position { target } => JointCommand::Position {
+                target: entry.gripper.as_ref().map_or(target, |gr| gr.motor_target(v, target)),
+            },
+            c => c,
+        };
         let g = entry.gains[v];
         let max = if g.max_effort.is_finite() {
             g.max_effort as Real
@@ -700,7 +767,9 @@ impl World {
     /// Per physics step: gravity compensation, effort joints and holonomic bases.
     pub(crate) fn apply_controllers(&mut self) {
         for i in 0..self.state.models.len() {
+            self.advance_gripper(i);
             self.compensate_gravity(i);
+            self.keep_driven_joints_awake(i);
         }
         let s = &mut self.state;
         for entry in &s.models {
@@ -727,6 +796,49 @@ impl World {
 }
 
 impl World {
+    /// Wakes the links of model `i` whose joints have a non-zero velocity command: a motor
+    /// that moves its joint slowly (a gripper closing at 5 cm/s) or pushes against a stall
+    /// (a gripper squeezing) must not be put to sleep with its body.
+    fn keep_driven_joints_awake(&mut self, i: usize) {
+        let entry = &self.state.models[i];
+        for v in 0..entry.commands.len() {
+            let entry = &self.state.models[i];
+            if let JointCommand::Velocity { target } = entry.commands[v]
+                && target != 0.0
+                && let Some(slot) = entry.slot(v)
+            {
+                self.wake(slot.body);
+            }
+        }
+    }
+
+    /// Moves the gripper's ramped finger targets of model `i` one physics step on and writes
+    /// them to the motors (gravity compensation, if on, rewrites them with its offset).
+    fn advance_gripper(&mut self, i: usize) {
+        let dt = f64::from(self.params.dt);
+        let entry = &mut self.state.models[i];
+        let Some(g) = entry.gripper.as_mut() else { return };
+        if g.ramp.iter().all(Option::is_none) {
+            return;
+        }
+        g.advance(&entry.commands, dt);
+        for k in 0..g.vars.len() {
+            let entry = &self.state.models[i];
+            let Some(g) = entry.gripper.as_ref() else { return };
+            let v = g.vars[k];
+            if let (Some(r), JointCommand::Position { target }) = (g.ramp[k], entry.commands[v]) {
+                let body = entry.slot(v).map(|s| s.body);
+                self.write_motor_target(i, v, r);
+                // A finger moving at a few cm/s must not be put to sleep with its body.
+                if r != target
+                    && let Some(b) = body
+                {
+                    self.wake(b);
+                }
+            }
+        }
+    }
+
     /// Shifts the position targets of model `i` by the gravity load on each joint divided by
     /// its stiffness, so that a position-controlled joint settles on its target instead of
     /// sagging below it (real arm controllers add the same feed-forward term). The load is
@@ -770,9 +882,10 @@ impl World {
         let offsets = &mut self.gravity_offsets;
         offsets.clear();
         for (v, command) in entry.commands.iter().enumerate() {
-            let (JointCommand::Position { target }, Some(slot)) = (command, entry.slot(v)) else {
+            let (&JointCommand::Position { target }, Some(slot)) = (command, entry.slot(v)) else {
                 continue;
             };
+            let target = entry.gripper.as_ref().map_or(target, |gr| gr.motor_target(v, target));
             let (Some(child), Some(mlink)) = (self.state.bodies.get(slot.body), mb.link(slot.link_id)) else {
                 continue;
             };

@@ -148,6 +148,7 @@ pub(crate) struct ModelEntry {
     pub(crate) gripper: Option<Gripper>,
     /// Whether any variable is in effort mode (forces must be re-applied every step).
     pub(crate) has_effort: bool,
+
     /// Whether position targets are offset by the joints' gravity load each physics step.
     pub(crate) gravity_compensation: bool,
 }
@@ -608,6 +609,14 @@ impl World {
             // Unactuated joints (passive furniture joints, joints switched off) stay free.
             if entry.commands[v] != JointCommand::Off {
                 entry.commands[v] = JointCommand::Position { target: x };
+            }
+        }
+        // Ramped finger targets start from the new positions.
+        if let Some(g) = entry.gripper.as_mut() {
+            for (i, &v) in g.vars.iter().enumerate() {
+                if let Some(r) = g.ramp[i].as_mut() {
+                    *r = q[v];
+                }
             }
         }
         for v in 0..q.len() {
