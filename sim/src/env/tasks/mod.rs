@@ -10,6 +10,7 @@
 //! reward, an optional [`Ending`] and [`Metrics`].
 
 pub(crate) mod articulated;
+pub(crate) mod clearance;
 pub(crate) mod field;
 pub(crate) mod interactive_nav;
 pub(crate) mod object_nav;
