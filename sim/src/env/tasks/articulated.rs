@@ -97,20 +97,17 @@ pub(crate) struct Articulated {
     pub(crate) metrics: Metrics,
 }
 
-/// Height above the floor of the handle of `joint`: the centre of the front-most visual part
-/// (along the furniture's +x, its front) of the link the joint moves, in the pose the world
-/// holds (closed at build time); the link's origin when it has no visual part.
+/// Height above the floor of the handle on `link` (the link a joint moves): the centre of its
+/// front-most visual part (along the furniture's +x, its front) in the pose the world holds
+/// (closed at build time); the link's origin when it has no visual part.
 fn handle_height(
     world: &World,
     handle: ModelHandle,
     model: &RobotModel,
     pose: &Isometry3<f64>,
-    joint: &str,
+    link: usize,
 ) -> EnvResult<f64> {
-    let j = model
-        .joint_index(joint)
-        .map_err(|e| EnvError::Task(format!("joint `{joint}`: {e}")))?;
-    let link = &model.links()[model.joints()[j].child];
+    let link = &model.links()[link];
     let at = world.link_pose(handle, &link.name)?;
     let front_most = link
         .visuals
@@ -154,14 +151,14 @@ impl Articulated {
                 if !wanted_joints(&config.name, asset.category, n) || model.upper()[v] <= 0.0 {
                     continue;
                 }
-                let h = handle_height(ctx.world, handle, model, &pose, n)?;
-                if !(low..=high).contains(&h) {
-                    continue;
-                }
                 let j = model
                     .joint_index(n)
                     .map_err(|e| EnvError::Task(format!("joint `{n}`: {e}")))?;
                 let link = model.joints()[j].child;
+                let h = handle_height(ctx.world, handle, model, &pose, link)?;
+                if !(low..=high).contains(&h) {
+                    continue;
+                }
                 let cap = free_opening(&view, model, &base, v, link);
                 // A joint that cannot open past the tolerance cannot be left open.
                 if cap > config.closed_tolerance {
