@@ -157,6 +157,11 @@ pub struct TaskConfig {
     /// closed limit.
     #[serde(default = "default_closed_tolerance")]
     pub closed_tolerance: f64,
+    /// Articulated tasks: only joints whose handle (the front-most part of the moving link,
+    /// closed) lies in this height band above the floor are closed (m); the default is the
+    /// Fetch's reach (see `docs/env.md`).
+    #[serde(default = "default_handle_height")]
+    pub handle_height: [f64; 2],
 }
 
 fn default_tolerance() -> f64 {
@@ -201,6 +206,9 @@ fn default_open_range() -> [f64; 2] {
 fn default_closed_tolerance() -> f64 {
     0.05
 }
+fn default_handle_height() -> [f64; 2] {
+    [0.1, 1.5]
+}
 
 impl TaskConfig {
     /// A task of this name with every other key at its default.
@@ -232,6 +240,7 @@ impl TaskConfig {
             room: None,
             open_range: default_open_range(),
             closed_tolerance: default_closed_tolerance(),
+            handle_height: default_handle_height(),
         }
     }
 
@@ -687,6 +696,7 @@ impl EnvConfig {
             ("task.goal_ahead", t.goal_ahead, 0.0),
             ("task.goal_height", t.goal_height, 0.0),
             ("task.open_range", t.open_range, 0.0),
+            ("task.handle_height", t.handle_height, 0.0),
         ] {
             if !(lo.is_finite() && hi.is_finite() && lo >= min && hi >= lo) {
                 return Err(bad(key, format!("[{lo}, {hi}] is not a range ≥ {min}")));

@@ -9,6 +9,7 @@ use super::arm::Arm;
 use super::config::EnvConfig;
 use super::error::{EnvError, EnvResult};
 use super::spaces::{DType, Obs, ObsData, Space};
+use super::tasks::viewpoints::CameraView;
 use super::tasks::{BuildContext, Ending, Metrics, ResetContext, StepContext, Task};
 use crate::assets::Category as AssetCategory;
 use crate::randomize::{Randomizer, Stream, add_depth_noise, perturb_pose2d, randomize_objects};
@@ -209,6 +210,7 @@ impl Env {
                 world: &mut world,
                 maps: &maps,
                 robot,
+                camera: CameraView::of(&config.sensors.camera),
             },
         )?;
         let arm = if task.uses_arm() {

@@ -3,12 +3,27 @@
 //! furniture in one room). Reset opens the joints to random positions and releases their
 //! controllers (they move freely, with their damping and friction); the robot starts in front
 //! of the furniture, facing it.
+//!
+//! Only joints the Fetch can close are candidates: those whose handle (the centre of the
+//! front-most part of the moving link, closed) lies within `handle_height` above the floor.
+//! The default band, [0.1, 1.5] m, follows the Fetch's URDF: the shoulder-lift axis sits
+//! 0.795 m above the floor with the torso down and 1.181 m with it up (base link 0.009 m up,
+//! torso joint 0.377 m above it, lift 0–0.386 m, shoulder pan 0.349 m and lift 0.06 m above
+//! that); the upper arm (shoulder lift to elbow) is 0.352 m, the rest to the gripper tip
+//! 0.626 m. Pushing a front closed along its normal with the forearm and gripper level puts
+//! the hand at most 0.352 × sin 1.221 (the shoulder lift's upward limit) = 0.331 m above the
+//! raised shoulder: 1.51 m. Low fronts are pushed with the forearm tilted down; the whole arm
+//! (0.978 m) at 45° down from the lowered shoulder reaches 0.795 − 0.69 = 0.10 m. Wall
+//! cabinets, whose door handles hang at about 1.8 m above a counter, are out of reach; a
+//! piece of furniture none of whose joints is in reach is no candidate, and a room without
+//! one is never drawn. The band is a model of the reach, not an inverse-kinematics check.
 
 use std::f64::consts::PI;
 
 use nalgebra::{Isometry3, Point3};
 use rand::RngExt;
 
+use super::clearance::{Placed, free_opening, overlaps, shape_pose};
 use super::field::{cell_center, nearest_free};
 use super::reaching::END_EFFECTOR;
 use super::{
@@ -17,6 +32,7 @@ use super::{
 use crate::assets::Category;
 use crate::env::config::TaskConfig;
 use crate::env::error::{EnvError, EnvResult};
+use crate::kinematics::RobotModel;
 use crate::world::{JointCommand, ModelHandle, World};
 
 /// `task_obs` entries: front of the most open target (x, y in the base frame), the direction
@@ -36,6 +52,12 @@ struct Target {
     front: f64,
     /// (variable index, joint name, upper limit) of the joints to close (closed at 0).
     joints: Vec<(usize, String, f64)>,
+    /// For each joint: the link it moves and the fraction of its range it opens freely
+    /// (see [`clearance`](super::clearance)).
+    swings: Vec<(usize, f64)>,
+    /// The furniture's model and world base pose, for placing its moving links.
+    model: RobotModel,
+    base: Isometry3<f64>,
     /// Where the robot starts for this target (x, y, yaw), if it has floor in front.
     start: Option<[f64; 3]>,
 }
@@ -75,6 +97,29 @@ pub(crate) struct Articulated {
     pub(crate) metrics: Metrics,
 }
 
+/// Height above the floor of the handle on `link` (the link a joint moves): the centre of its
+/// front-most visual part (along the furniture's +x, its front) in the pose the world holds
+/// (closed at build time); the link's origin when it has no visual part.
+fn handle_height(
+    world: &World,
+    handle: ModelHandle,
+    model: &RobotModel,
+    pose: &Isometry3<f64>,
+    link: usize,
+) -> EnvResult<f64> {
+    let link = &model.links()[link];
+    let at = world.link_pose(handle, &link.name)?;
+    let front_most = link
+        .visuals
+        .iter()
+        .map(|v| at * Point3::from(v.origin.translation.vector))
+        .max_by(|a, b| {
+            let x = |p: &Point3<f64>| pose.inverse_transform_point(p).x;
+            x(a).total_cmp(&x(b))
+        });
+    Ok(front_most.map_or(at.translation.z, |p| p.z))
+}
+
 /// Which joints of a piece of furniture a task closes.
 fn wanted_joints(task: &str, category: Category, joint: &str) -> bool {
     match task {
@@ -96,19 +141,36 @@ impl Articulated {
                 continue;
             };
             let model = ctx.world.model(handle)?;
-            let joints: Vec<(usize, String, f64)> = model
-                .variable_names()
-                .iter()
-                .enumerate()
-                .filter(|(v, n)| wanted_joints(&config.name, asset.category, n) && model.upper()[*v] > 0.0)
-                .map(|(v, n)| (v, n.clone(), model.upper()[v]))
-                .collect();
+            let pose = object.pose();
+            let base = ctx.world.base_pose(handle)?;
+            let view = ctx.world.obstacles_view(&[handle, ctx.robot])?;
+            let [low, high] = config.handle_height;
+            let mut joints: Vec<(usize, String, f64)> = Vec::new();
+            let mut swings = Vec::new();
+            for (v, n) in model.variable_names().iter().enumerate() {
+                if !wanted_joints(&config.name, asset.category, n) || model.upper()[v] <= 0.0 {
+                    continue;
+                }
+                let j = model
+                    .joint_index(n)
+                    .map_err(|e| EnvError::Task(format!("joint `{n}`: {e}")))?;
+                let link = model.joints()[j].child;
+                let h = handle_height(ctx.world, handle, model, &pose, link)?;
+                if !(low..=high).contains(&h) {
+                    continue;
+                }
+                let cap = free_opening(&view, model, &base, v, link);
+                // A joint that cannot open past the tolerance cannot be left open.
+                if cap > config.closed_tolerance {
+                    joints.push((v, n.clone(), model.upper()[v]));
+                    swings.push((link, cap));
+                }
+            }
             if joints.is_empty() {
                 continue;
             }
             let depth = asset.aabb_max[0] - asset.aabb_min[0];
             let width = asset.aabb_max[1] - asset.aabb_min[1];
-            let pose = object.pose();
             let reach = (0.8 * depth).max(0.5 * width);
             candidates.push(Target {
                 name: object.name.clone(),
@@ -118,12 +180,16 @@ impl Articulated {
                 pose,
                 front: asset.aabb_max[0],
                 joints,
+                swings,
+                model: model.clone(),
+                base,
             });
         }
+        let [low, high] = config.handle_height;
         let what = match config.name.as_str() {
-            "push_drawer" => "a bottom cabinet with drawers",
-            "push_cabinet" => "a bottom cabinet with doors",
-            _ => "articulated furniture",
+            "push_drawer" => format!("a bottom cabinet with drawers in reach (handles {low}–{high} m up)"),
+            "push_cabinet" => format!("a bottom cabinet with doors in reach (handles {low}–{high} m up)"),
+            _ => format!("articulated furniture in reach (handles {low}–{high} m up)"),
         };
         let groups: Vec<Vec<usize>> = if config.name == "room_rearrangement" {
             let mut rooms: Vec<&str> = candidates.iter().filter_map(|t| t.room.as_deref()).collect();
@@ -231,11 +297,36 @@ impl Articulated {
         self.active = self.groups[group].clone();
         self.names = self.active.iter().map(|&i| self.candidates[i].name.clone()).collect();
         let [lo, hi] = self.config.open_range;
+        // Opened links so far: a link that would overlap one is closed halfway, up to four
+        // times, then left closed.
+        let mut placed: Vec<Placed<'_>> = Vec::new();
         for &i in &self.active {
             let t = &self.candidates[i];
             let mut q = ctx.world.joint_positions(t.handle)?;
-            for (v, _, upper) in &t.joints {
-                q[*v] = upper * ctx.rng.random_range(lo..=hi);
+            let mut scratch = vec![0.0; t.model.dof()];
+            let mut poses = t.model.pose_buffer();
+            for ((v, _, upper), &(link, cap)) in t.joints.iter().zip(&t.swings) {
+                let mut f = ctx.rng.random_range(lo..=hi).min(cap);
+                let mut fits = false;
+                for _ in 0..5 {
+                    let Some(pose) = shape_pose(&t.model, &t.base, *v, f * upper, link, &mut scratch, &mut poses)
+                    else {
+                        fits = true;
+                        break;
+                    };
+                    let me = Placed {
+                        model: &t.model,
+                        link,
+                        pose,
+                    };
+                    if !overlaps(&me, &placed) {
+                        placed.push(me);
+                        fits = true;
+                        break;
+                    }
+                    f /= 2.0;
+                }
+                q[*v] = if fits { f * upper } else { 0.0 };
             }
             ctx.world.reset_configuration(t.handle, &q)?;
             for (_, name, _) in &t.joints {

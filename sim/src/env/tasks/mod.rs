@@ -10,11 +10,13 @@
 //! reward, an optional [`Ending`] and [`Metrics`].
 
 pub(crate) mod articulated;
+pub(crate) mod clearance;
 pub(crate) mod field;
 pub(crate) mod interactive_nav;
 pub(crate) mod object_nav;
 pub(crate) mod point_nav;
 pub(crate) mod reaching;
+pub(crate) mod viewpoints;
 
 use nalgebra::Isometry3;
 use rand_pcg::Pcg64Mcg;
@@ -101,6 +103,8 @@ pub(crate) struct BuildContext<'a> {
     pub(crate) world: &'a mut World,
     pub(crate) maps: &'a SceneMaps,
     pub(crate) robot: ModelHandle,
+    /// The configured camera (`object_nav` estimates its views with it).
+    pub(crate) camera: viewpoints::CameraView,
 }
 
 /// One task's state.
@@ -141,7 +145,7 @@ impl Task {
     pub(crate) fn reset(&mut self, ctx: ResetContext<'_>) -> EnvResult<[f64; 3]> {
         match self {
             Task::PointNav(t) => t.reset(ctx.maps, ctx.rng),
-            Task::ObjectNav(t) => t.reset(ctx.maps, ctx.rng),
+            Task::ObjectNav(t) => t.reset(ctx.maps, ctx.world, ctx.rng),
             Task::InteractiveNav(t) => t.reset(ctx),
             Task::Reaching(t) => t.reset(ctx),
             Task::Articulated(t) => t.reset(ctx),

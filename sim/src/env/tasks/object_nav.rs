@@ -1,19 +1,28 @@
 //! `object_nav`: reach a view in which a target category (e.g. `fridge`) covers at least
-//! `visible_fraction` of the camera's semantic (`seg`) image. The shaping potential is the
-//! geodesic distance to the nearest instance: a multi-source distance field from the
-//! traversable cells nearest each instance's footprint.
+//! `visible_fraction` of the camera's semantic (`seg`) image.
+//!
+//! The success region is estimated once per category, at its first episode: the
+//! [viewpoints](super::viewpoints) are the traversable cells from which the robot's camera,
+//! turned towards an instance, would see it fill at least the fraction (projected bounding
+//! box over the image, scaled by the clear share of sight rays cast against the world). A
+//! multi-source distance field from those cells gives the geodesic distance to the nearest
+//! view: the shortest path length of SPL, the shaping potential, the `task_obs` distance and
+//! the start's `geodesic_range`. When no cell qualifies (or the robot has no default camera)
+//! the field falls back to the traversable cells nearest each instance's footprint.
 
 use nalgebra::{Isometry3, Point3};
 use rand::RngExt;
 
 use super::field::{DistanceField, cell_center, free_cells};
 use super::point_nav::spl;
+use super::viewpoints::{Instance, Rig, viewpoints};
 use super::{BuildContext, Ending, Metrics, Progress, StepContext, failure, in_planar_frame, xy_of};
 use crate::assets::Category;
 use crate::env::config::TaskConfig;
 use crate::env::error::{EnvError, EnvResult};
 use crate::scene::SceneMaps;
-use crate::sensors::SemanticClass;
+use crate::sensors::{Mount, SemanticClass};
+use crate::world::{ModelHandle, World};
 
 /// `task_obs` entries: nearest instance x, y in the robot frame, geodesic distance to a view
 /// of it, fraction of the image the category covers, its semantic class id, forward speed,
@@ -45,8 +54,12 @@ struct Target {
     centers: Vec<[f64; 2]>,
     /// Oriented footprints: (pose, half extents x, y).
     footprints: Vec<(Isometry3<f64>, [f64; 2])>,
-    /// Built at its first episode.
+    /// Names, poses and boxes of its instances.
+    instances: Vec<Instance>,
+    /// Built at its first episode: the distance to the nearest viewpoint.
     field: Option<DistanceField>,
+    /// The viewpoint cells the field starts from (empty: the footprint fallback).
+    views: Vec<usize>,
 }
 
 /// The object-navigation task state of one episode.
@@ -55,6 +68,9 @@ pub(crate) struct ObjectNav {
     config: TaskConfig,
     targets: Vec<Target>,
     current: usize,
+    /// The robot's camera, when it has a default one.
+    rig: Option<Rig>,
+    robot: ModelHandle,
     pub(crate) start: [f64; 3],
     coverage: f64,
     progress: Progress,
@@ -86,13 +102,21 @@ impl ObjectNav {
                         class: SemanticClass::of_category(asset.category),
                         centers: Vec::new(),
                         footprints: Vec::new(),
+                        instances: Vec::new(),
                         field: None,
+                        views: Vec::new(),
                     });
                     targets.last_mut().expect("just pushed")
                 }
             };
             entry.centers.push([c.x, c.y]);
             entry.footprints.push((centre_pose, [half.x, half.y]));
+            entry.instances.push(Instance {
+                name: object.name.clone(),
+                pose,
+                min: asset.aabb_min,
+                max: asset.aabb_max,
+            });
         }
         if targets.is_empty() {
             let (key, what) = match &config.target_category {
@@ -113,6 +137,8 @@ impl ObjectNav {
             config,
             targets,
             current: 0,
+            rig: rig_of(ctx),
+            robot: ctx.robot,
             start: [0.0; 3],
             coverage: 0.0,
             progress: Progress::default(),
@@ -133,12 +159,33 @@ impl ObjectNav {
         [c[0], c[1], 0.0]
     }
 
-    /// Draws the category and a start whose geodesic distance to it is in range.
-    pub(crate) fn reset(&mut self, maps: &SceneMaps, rng: &mut rand_pcg::Pcg64Mcg) -> EnvResult<[f64; 3]> {
+    /// The viewpoint cells of the current category (empty before its first episode, or when
+    /// the footprint fallback is in use).
+    #[cfg(test)]
+    pub(crate) fn views(&self) -> &[usize] {
+        &self.targets[self.current].views
+    }
+
+    /// Draws the category and a start whose geodesic distance to a view of it is in range
+    /// (building the category's viewpoints and field at its first episode).
+    pub(crate) fn reset(
+        &mut self,
+        maps: &SceneMaps,
+        world: &World,
+        rng: &mut rand_pcg::Pcg64Mcg,
+    ) -> EnvResult<[f64; 3]> {
         self.current = rng.random_range(0..self.targets.len());
         let t = &mut self.targets[self.current];
         if t.field.is_none() {
-            t.field = Some(view_field(maps, &t.footprints));
+            if let Some(rig) = &self.rig {
+                let view = world.obstacles_view(&[self.robot])?;
+                t.views = viewpoints(maps, rig, &view, &t.instances, self.config.visible_fraction);
+            }
+            t.field = Some(if t.views.is_empty() {
+                footprint_field(maps, &t.footprints)
+            } else {
+                DistanceField::from_cells(maps, &t.views)
+            });
         }
         let field = t.field.as_ref().expect("built above");
         let [lo, hi] = self.config.geodesic_range;
@@ -244,9 +291,23 @@ fn rect_distance(pose: &Isometry3<f64>, half: [f64; 2], p: [f64; 2]) -> f64 {
     dx.hypot(dy)
 }
 
-/// The field of geodesic distances to the traversable cells nearest each footprint (those
-/// within one and a half cells of the nearest one).
-fn view_field(maps: &SceneMaps, footprints: &[(Isometry3<f64>, [f64; 2])]) -> DistanceField {
+/// The robot's camera as the viewpoint estimate needs it: the default mount's optical frame in
+/// the base frame (measured on the robot as spawned) and the configured intrinsics. `None`
+/// when the robot has no default camera.
+fn rig_of(ctx: &BuildContext<'_>) -> Option<Rig> {
+    let name = ctx.world.model(ctx.robot).ok()?.name().to_owned();
+    let camera = Mount::default_camera(&name)?.pose(ctx.world, Some(ctx.robot)).ok()?;
+    let base = ctx.world.base_pose(ctx.robot).ok()?;
+    Some(Rig {
+        view: ctx.camera,
+        camera_in_base: base.inverse() * camera,
+        base_z: base.translation.z,
+    })
+}
+
+/// The fallback field: geodesic distances to the traversable cells nearest each footprint
+/// (those within one and a half cells of the nearest one).
+fn footprint_field(maps: &SceneMaps, footprints: &[(Isometry3<f64>, [f64; 2])]) -> DistanceField {
     let free = free_cells(maps);
     let mut sources = Vec::new();
     for (pose, half) in footprints {
@@ -266,4 +327,121 @@ fn view_field(maps: &SceneMaps, footprints: &[(Isometry3<f64>, [f64; 2])]) -> Di
         );
     }
     DistanceField::from_cells(maps, &sources)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::viewpoints::{CameraView, box_coverage, camera_at, viewpoints};
+    use super::*;
+    use crate::scene::{GenerateOptions, MapOptions, SceneFile, generate};
+    use crate::world::{LoadedScene, WorldConfig};
+    use rand::SeedableRng;
+    use rand_pcg::Pcg64Mcg;
+
+    /// The home, world and maps of `examples/configs/object_nav.toml` (home seed 1, two rooms,
+    /// the TurtleBot), built as the env builds them.
+    fn home() -> (SceneFile, World, LoadedScene, SceneMaps) {
+        let home = generate(&GenerateOptions {
+            seed: 1,
+            rooms: 2,
+            robot: Some("turtlebot".into()),
+            small_objects: false,
+        })
+        .unwrap();
+        let mut world = World::new(WorldConfig::default()).unwrap();
+        let loaded = world.load_scene(&home).unwrap();
+        world.settle(120);
+        let maps = SceneMaps::build(
+            &home,
+            &MapOptions {
+                robot_radius: 0.23,
+                floor_clearance: 0.008,
+                ..MapOptions::default()
+            },
+        )
+        .unwrap();
+        (home, world, loaded, maps)
+    }
+
+    const CAMERA: CameraView = CameraView {
+        vfov_deg: 60.0,
+        aspect: 64.0 / 48.0,
+        near: 0.05,
+        far: 5.0,
+    };
+
+    fn fridge_nav(home: &SceneFile, world: &mut World, loaded: &LoadedScene, maps: &SceneMaps) -> ObjectNav {
+        let mut config = TaskConfig::named("object_nav");
+        config.target_category = Some("fridge".into());
+        config.geodesic_range = [1.0, 8.0];
+        let robot = loaded.robot.unwrap();
+        ObjectNav::new(
+            config,
+            &BuildContext {
+                home,
+                loaded,
+                world,
+                maps,
+                robot,
+                camera: CAMERA,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_nearest_view_is_closer_than_the_object_and_found_through_walls_only_where_seen() {
+        let (home, mut world, loaded, maps) = home();
+        let mut nav = fridge_nav(&home, &mut world, &loaded, &maps);
+        let start = nav.reset(&maps, &world, &mut Pcg64Mcg::seed_from_u64(0)).unwrap();
+        let views = nav.views().to_vec();
+        assert!(!views.is_empty(), "the fridge has viewpoints");
+        let t = &nav.targets[nav.current];
+        let to_view = t.field.as_ref().unwrap().at([start[0], start[1]]).unwrap();
+        let to_object = footprint_field(&maps, &t.footprints).at([start[0], start[1]]).unwrap();
+        eprintln!(
+            "{} viewpoints; from the start {start:?}: {to_view:.2} m to a view, {to_object:.2} m to the fridge",
+            views.len()
+        );
+        assert!(to_view.is_finite() && to_view >= 1.0 && to_view < to_object);
+        // The field is 0 exactly on the viewpoints.
+        assert!(views.iter().all(|&i| t.field.as_ref().unwrap().cell(i) == 0.0));
+
+        // 1.5 m straight out of the fridge's front, facing it: a viewpoint.
+        let fridge = &t.instances[0];
+        let front = fridge.pose * Point3::new(fridge.max.x + 1.5, 0.0, 0.0);
+        let cell = super::super::field::nearest_free(&maps, [front.x, front.y], 0.4).expect("floor in front");
+        assert!(views.contains(&cell), "1.5 m in front of the fridge");
+
+        // At 2 % the corridor next to the kitchen comes within range of the fridge (at 5 % it
+        // is too far): there the walls hide it, but for cells seeing it through the doorway.
+        let rig = nav.rig.unwrap();
+        let view = world.obstacles_view(&[loaded.robot.unwrap()]).unwrap();
+        let wide = viewpoints(&maps, &rig, &view, &t.instances, 0.02);
+        let room = maps.room_at([front.x, front.y]).unwrap().to_owned();
+        let centre = fridge.pose * Point3::from((fridge.min + fridge.max) / 2.0);
+        let (mut near_elsewhere, mut seen_elsewhere) = (0, 0);
+        for i in free_cells(&maps) {
+            let p = cell_center(&maps, i);
+            if maps.room_at(p).is_none_or(|r| r == room) {
+                continue;
+            }
+            if box_coverage(&CAMERA, &camera_at(&rig, p, centre), fridge) >= 0.02 {
+                near_elsewhere += 1;
+                seen_elsewhere += usize::from(wide.binary_search(&i).is_ok());
+            }
+        }
+        eprintln!(
+            "at 2 %: {} viewpoints; outside the kitchen {near_elsewhere} cells near enough, {seen_elsewhere} of them viewpoints",
+            wide.len()
+        );
+        assert!(wide.len() > views.len(), "a smaller fraction, a larger region");
+        assert!(near_elsewhere > 0, "the corridor comes within range of the fridge");
+        assert!(seen_elsewhere * 2 < near_elsewhere, "walls hide the fridge");
+
+        // Same seed, same viewpoints.
+        let mut again = fridge_nav(&home, &mut world, &loaded, &maps);
+        again.reset(&maps, &world, &mut Pcg64Mcg::seed_from_u64(0)).unwrap();
+        assert_eq!(again.views(), views.as_slice());
+    }
 }
