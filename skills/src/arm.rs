@@ -20,7 +20,7 @@ use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatr
 use hearth_planning::goal::PoseGoal;
 use hearth_planning::obstacles::ParryScene;
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
-use hearth_planning::space::JointSpace;
+use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::{Limits, Trajectory};
 use hearth_planning::validity::Attached;
 use hearth_planning::{
@@ -28,7 +28,7 @@ use hearth_planning::{
 };
 use hearth_sim::world::{BodyId, JointCommand, ModelHandle, World};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use rand::Rng;
+use rand::{Rng, RngExt};
 
 use crate::error::{SkillError, SkillResult};
 use crate::execution::Execution;
@@ -733,12 +733,21 @@ impl Arm {
         let (_, start) = self.configuration(world)?;
         if !validity.is_valid(&start) {
             // Closer than the margin to something (after a contact-rich move): plan without
-            // the margin rather than not at all; a start that touches is still refused.
+            // the margin rather than not at all.
             validity = self.validity(world, ignore, 0.0)?;
         }
+        // Touching something (pressed against a wall by a pull, say): back off to the nearest
+        // free configuration close by first, and plan from there. None close by: the planner
+        // refuses the start, naming the contact.
+        let escape = if validity.is_valid(&start) {
+            None
+        } else {
+            escape_from(&self.space, &mut validity, &start, rng)
+        };
+        let from = escape.clone().unwrap_or_else(|| start.clone());
         let goals = self.goal_configurations(world, target, &mut validity, rng)?;
         let mut motion = MotionValidator::new(self.space.clone(), self.settings.resolution);
-        let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals));
+        let request = PlanRequest::new(from.clone(), Goal::AnyOf(goals));
         let budget = Budget::iterations(self.settings.plan_iterations).with_time(self.settings.plan_time);
         let solution = BiRrt::default()
             .plan(&mut motion, &mut validity, &request, &budget, rng)
@@ -757,7 +766,7 @@ impl Arm {
             Duration::from_secs(1),
             rng,
         )?;
-        let goal = smoothed.path.states.last().cloned().unwrap_or(start);
+        let goal = smoothed.path.states.last().cloned().unwrap_or_else(|| from.clone());
         // Jerk-limited execution through waypoints of the smoothed motion; it may cut corners,
         // so it is kept only if it stays collision-free.
         let mut waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
@@ -772,6 +781,17 @@ impl Arm {
                 (j, true)
             }
             _ => (smoothed.trajectory, false),
+        };
+        let trajectory = match escape {
+            Some(free) => {
+                let leg = Path {
+                    states: vec![start, free],
+                };
+                Trajectory::rest_to_rest(&self.space, &leg, &self.limits)
+                    .and_then(|lead| lead.then(trajectory))
+                    .map_err(|e| SkillError::PlanningFailed(format!("backing off the contact: {e}")))?
+            }
+            None => trajectory,
         };
         let path_length = trajectory.length(&self.space, self.settings.resolution);
         Ok(ArmPlan {
@@ -1386,6 +1406,48 @@ pub fn approach_rotation(approach: &Vector3<f64>, roll: f64) -> SkillResult<Unit
     let r = nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_columns(&[x, y, z]));
     Ok(UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_unchecked(x), roll)
         * UnitQuaternion::from_rotation_matrix(&r))
+}
+
+/// Largest joint-space step (rad) [`escape_from`] takes to get free of a contact.
+const ESCAPE_RADII: [f64; 4] = [0.03, 0.06, 0.1, 0.15];
+/// Samples per radius.
+const ESCAPE_SAMPLES: usize = 40;
+
+/// The free configuration nearest to `start` (which touches something) among random ones at
+/// most 0.03, 0.06, 0.1 and 0.15 rad away per joint, whose straight way out is free from
+/// halfway on (the first half may still graze what `start` touches); `None` if there is none.
+fn escape_from<R: Rng + ?Sized>(
+    space: &JointSpace,
+    validity: &mut RobotValidity,
+    start: &[f64],
+    rng: &mut R,
+) -> Option<Vec<f64>> {
+    let mut q = vec![0.0; start.len()];
+    let mut mid = vec![0.0; start.len()];
+    for r in ESCAPE_RADII {
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        for _ in 0..ESCAPE_SAMPLES {
+            for (x, s) in q.iter_mut().zip(start) {
+                *x = s + rng.random_range(-r..=r);
+            }
+            space.enforce_bounds(&mut q);
+            let d = space.distance(start, &q);
+            if best.as_ref().is_some_and(|(b, _)| *b <= d) || !validity.is_valid(&q) {
+                continue;
+            }
+            let free_on = [0.5, 0.75].iter().all(|&t| {
+                space.interpolate(start, &q, t, &mut mid);
+                validity.is_valid(&mid)
+            });
+            if free_on {
+                best = Some((d, q.clone()));
+            }
+        }
+        if let Some((_, q)) = best {
+            return Some(q);
+        }
+    }
+    None
 }
 
 fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {

@@ -70,7 +70,9 @@ pub struct GraspCandidate {
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct GraspSettings {
-    /// Squeeze of the fingers, N (within the finger's effort limit).
+    /// Most squeeze of the fingers, N (within the finger's effort limit). A grasp squeezes
+    /// with what holds the object three times over (its weight by friction, and for a rim
+    /// grasp the moment of its weight), at least 10 N, at most this.
     pub force: f64,
     /// Widest object across the fingers, metres (the Fetch opens 94 mm between its pads).
     pub max_width: f64,
@@ -284,14 +286,20 @@ const RIM_MIN_PINCH: f64 = 0.015;
 
 /// Length of wall between the pads that carries a rim grasp's tipping moment, metres.
 const RIM_PINCH: f64 = 0.03;
-/// Least squeeze of a rim grasp, N.
-const RIM_MIN_FORCE: f64 = 10.0;
+/// Least squeeze of a grasp, N.
+const MIN_SQUEEZE: f64 = 10.0;
+/// How many times over the squeeze holds the object's weight (or a rim grasp's moment).
+const SQUEEZE_SAFETY: f64 = 3.0;
+/// Friction the squeeze counts on between pads and object (the pads have more).
+const SQUEEZE_FRICTION: f64 = 1.0;
 
-/// The squeeze of a rim grasp: 1.5 times what holds the vessel level against the moment of
-/// its weight about the grasp (its centre hangs off to the side), at most `max`. No more
-/// than that: the contacts are soft, so a hard squeeze sinks the pads into a light vessel's
-/// thin wall and lets it tip.
-fn rim_force(
+/// The squeeze of a grasp: what holds the object `SQUEEZE_SAFETY` times over, at least
+/// `MIN_SQUEEZE` and at most `max`. Two pads carry the weight by friction; a rim grasp also
+/// holds the vessel level against the moment of its weight, whose centre hangs off to the
+/// side, over `RIM_PINCH` of wall. No more than that: contacts are soft, so a squeeze far
+/// beyond the weight sinks the pads millimetres into a light object (into a bowl's thin wall)
+/// and lets it turn in the fingers.
+fn squeeze(
     world: &World,
     object: ModelHandle,
     bodies: &[BodyId],
@@ -299,11 +307,15 @@ fn rim_force(
     max: f64,
 ) -> SkillResult<f64> {
     let mass = bodies.iter().map(|&b| world.body_mass(b)).sum::<Result<f64, _>>()?;
-    let lever = (world.base_pose(object)?.translation.vector - candidate.pose.translation.vector)
-        .xy()
-        .norm();
-    let moment = mass * 9.81 * lever;
-    Ok((1.5 * moment / RIM_PINCH).clamp(RIM_MIN_FORCE.min(max), max))
+    let weight = mass * 9.81;
+    let mut need = weight / (2.0 * SQUEEZE_FRICTION);
+    if candidate.kind == GraspKind::Rim {
+        let lever = (world.base_pose(object)?.translation.vector - candidate.pose.translation.vector)
+            .xy()
+            .norm();
+        need = need.max(weight * lever / RIM_PINCH);
+    }
+    Ok((SQUEEZE_SAFETY * need).clamp(MIN_SQUEEZE.min(max), max))
 }
 
 /// Rim grasps of an open vessel (see the [module docs](self)), pushed onto `out` in order
@@ -508,10 +520,7 @@ pub fn grasp<R: Rng + ?Sized>(
             settings.attempts
         ))
     })?;
-    let force = match report.candidate.kind {
-        GraspKind::Rim => rim_force(world, object, &bodies, &report.candidate, settings.force)?,
-        GraspKind::Side | GraspKind::Top => settings.force,
-    };
+    let force = squeeze(world, object, &bodies, &report.candidate, settings.force)?;
     world.gripper_close(arm.robot(), force)?;
     let dt = world.config().control_dt();
     for _ in 0..(1.2 / dt).ceil() as usize {

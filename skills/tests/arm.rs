@@ -6,6 +6,7 @@ use hearth_sim::kinematics::RobotModel;
 use hearth_sim::scene::{SceneFile, SceneObject};
 use hearth_sim::world::{ModelHandle, SpawnOptions, World, WorldConfig};
 use hearth_skills::arm::{Arm, ArmSettings, ArmTarget, LinearMove};
+use hearth_skills::planning::StateValidator;
 use hearth_skills::{Execution, SkillError};
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::SeedableRng;
@@ -121,6 +122,39 @@ fn straight_line_moves_follow_the_line_and_stop_at_the_table() {
         arm.move_linear(&mut world, &bad, Execution::Physics),
         Err(SkillError::BadInput(_))
     ));
+}
+
+#[test]
+fn an_arm_pressed_onto_the_table_backs_off_and_plans_from_there() {
+    let (mut world, robot, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
+    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + 0.2), down);
+    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
+        .unwrap();
+    let mut press = LinearMove::new(-Vector3::z(), 0.4);
+    press.check_world = false;
+    press.force_limit = 40.0;
+    assert!(
+        arm.move_linear(&mut world, &press, Execution::Physics)
+            .unwrap()
+            .stopped_by_force
+    );
+    // The fingers touch the table: the start is not free even without a margin.
+    let (_, start) = arm.configuration(&world).unwrap();
+    let mut check = arm.validity(&world, &[], 0.0).unwrap();
+    assert!(!check.is_valid(&start));
+    // The plan backs off to a free configuration close by first, then goes up.
+    let plan = arm.plan(&world, &ArmTarget::Pose(above), &[], &mut rng(3)).unwrap();
+    let mut first = vec![0.0; start.len()];
+    plan.trajectory.sample(0.0, &mut first, None);
+    for (a, b) in first.iter().zip(&start) {
+        assert!((a - b).abs() < 1e-9, "the plan starts where the arm is");
+    }
+    let r = arm.execute(&mut world, &plan, Execution::Physics).unwrap();
+    assert!(r.executed);
+    let tip = arm.tip_pose(&world).unwrap().translation.vector;
+    assert!((tip - above.translation.vector).norm() < 0.03, "{tip:?}");
 }
 
 #[test]

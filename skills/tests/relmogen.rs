@@ -93,7 +93,7 @@ fn opening(env: &ReLMoGenEnv) -> f64 {
 }
 
 /// The continuous action pushing the front of the highest open drawer straight ahead.
-fn push_drawer_action(env: &ReLMoGenEnv) -> [f32; 7] {
+fn push_drawer_action(env: &ReLMoGenEnv) -> [f32; 8] {
     let world = env.env().world();
     let cab = cabinet(env);
     let (_, joints) = env.env().task_objects().pop().unwrap();
@@ -113,7 +113,7 @@ fn push_drawer_action(env: &ReLMoGenEnv) -> [f32; 7] {
     }
     let (_, (u, v)) = best.expect("a drawer front is in view");
     let scale = |x: f64| (2.0 * x.floor() / f64::from(SIDE - 1) - 1.0) as f32;
-    [1.0, 0.0, 0.0, 0.0, scale(u), scale(v), 0.0]
+    [1.0, 0.0, 0.0, 0.0, scale(u), scale(v), 0.0, -1.0]
 }
 
 #[test]
@@ -122,7 +122,7 @@ fn spaces_and_config_errors() {
     let a = env.action_space();
     assert_eq!(
         (a.shape.clone(), a.dtype, a.low, a.high),
-        (vec![7], DType::F32, -1.0, 1.0)
+        (vec![8], DType::F32, -1.0, 1.0)
     );
     let names: Vec<&str> = env.observation_spaces().iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["rgb", "task_obs"]);
@@ -196,7 +196,7 @@ fn a_base_subgoal_moves_the_base() {
     let robot = env.robot();
     let p0 = env.env().world().base_pose(robot).unwrap().translation;
     // Back up 0.5 m (bearing π) and keep the heading.
-    let step = env.step(&[-1.0, 1.0, -0.5, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    let step = env.step(&[-1.0, 1.0, -0.5, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     let info = &step.info;
     assert_eq!(info.subgoal, "base");
     assert!(info.planner_success, "{info:?}");
@@ -209,13 +209,13 @@ fn a_base_subgoal_moves_the_base() {
 #[test]
 fn bad_actions_are_refused_and_leave_the_world_alone() {
     let mut env = ReLMoGenEnv::new(config("bad", "continuous", "")).unwrap();
-    assert!(matches!(env.step(&[0.0; 7]), Err(ReLMoGenError::NotReset)));
+    assert!(matches!(env.step(&[0.0; 8]), Err(ReLMoGenError::NotReset)));
     env.reset(0).unwrap();
     let hash = env.env().world().state_hash();
     for action in [
-        vec![f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        vec![0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        vec![0.0; 6],
+        vec![f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        vec![0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        vec![0.0; 7],
     ] {
         let e = env.step(&action).unwrap_err();
         assert!(matches!(e, ReLMoGenError::BadAction(_)), "{e}");
@@ -250,7 +250,7 @@ fn a_failed_subgoal_is_penalised_with_its_reason() {
     // A continuous base goal inside the cabinet is unreachable.
     let mut c = ReLMoGenEnv::new(config("fail", "continuous", "failure_penalty = 5.0")).unwrap();
     c.reset(2).unwrap();
-    let step = c.step(&[-1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    let step = c.step(&[-1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     assert!(!step.info.planner_success);
     assert_eq!(step.info.failure_reason, Some("unreachable"), "{:?}", step.info);
     assert!(step.reward < -4.9, "{}", step.reward);
@@ -264,7 +264,7 @@ fn the_same_seed_gives_the_same_episode() {
         env.reset(3).unwrap();
         let push = push_drawer_action(&env);
         let a = env.step(&push).unwrap();
-        let b = env.step(&[-1.0, 0.8, -0.6, 0.2, 0.0, 0.0, 0.0]).unwrap();
+        let b = env.step(&[-1.0, 0.8, -0.6, 0.2, 0.0, 0.0, 0.0, 0.0]).unwrap();
         runs.push((env.env().world().state_hash(), a.reward, b.reward, b.info.path_length));
     }
     assert_eq!(runs[0], runs[1]);
@@ -367,6 +367,7 @@ fn interactive_nav_takes_base_subgoals_towards_the_goal() {
         0.0,
         0.0,
         0.0,
+        0.0,
     ];
     let step = env.step(&action).unwrap();
     // A chair may stand on the straight line; the planner goes round or reports why not.
@@ -452,7 +453,7 @@ fn push_cabinet_runs_arm_subgoals_on_the_doors() {
         "{joints:?}"
     );
     // Push what the image centre sees, straight ahead.
-    let step = env.step(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    let step = env.step(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     let info = &step.info;
     assert_eq!(info.subgoal, "arm");
     assert!(info.planner_success != info.failure_reason.is_some(), "{info:?}");

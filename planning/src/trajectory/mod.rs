@@ -71,6 +71,22 @@ pub enum TrajectoryError {
     /// A path without states.
     #[error("the path has no states")]
     EmptyPath,
+    /// Two motions joined where the first does not end at rest where the second starts.
+    #[error(
+        "the motions do not meet at rest: coordinate {index} is {end} and {start}, velocities {v_end} and {v_start}"
+    )]
+    Discontinuous {
+        /// Coordinate that differs.
+        index: usize,
+        /// Its position at the end of the first motion.
+        end: f64,
+        /// Its position at the start of the second.
+        start: f64,
+        /// Its velocity at the end of the first motion.
+        v_end: f64,
+        /// Its velocity at the start of the second.
+        v_start: f64,
+    },
     /// The trajectory generator found no motion.
     #[error("the trajectory generator failed: {0}")]
     Generator(String),
@@ -151,6 +167,14 @@ fn unwrapped<S: Space>(space: &S, path: &Path) -> Result<Vec<Vec<f64>>, Trajecto
     Ok(out)
 }
 
+fn check_dim_of(what: &'static str, expected: usize, got: usize) -> Result<(), TrajectoryError> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(TrajectoryError::Dimension { what, expected, got })
+    }
+}
+
 fn check_dim(limits: &Limits, dim: usize) -> Result<(), TrajectoryError> {
     if limits.dim() == dim {
         Ok(())
@@ -211,6 +235,49 @@ impl Trajectory {
             pieces.push(Piece::Line(LineRamp::new(&states[0], &vec![0.0; space.dim()], limits)));
         }
         Ok(Self::from_pieces(space.dim(), pieces))
+    }
+
+    /// This motion followed by `next`, which must start where this one ends (within 1e-6),
+    /// both at rest there.
+    ///
+    /// # Errors
+    /// [`TrajectoryError::Dimension`] for motions of different dimensions;
+    /// [`TrajectoryError::Discontinuous`] when they do not meet at rest.
+    ///
+    /// ```
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    /// use hearth_planning::Path;
+    /// let space = JointSpace::new(&[-3.0], &[3.0], &[false])?;
+    /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
+    /// let leg = |a: f64, b: f64| Trajectory::rest_to_rest(&space, &Path { states: vec![vec![a], vec![b]] }, &limits);
+    /// let both = leg(0.0, 1.0)?.then(leg(1.0, -1.0)?)?;
+    /// let mut q = [0.0];
+    /// both.sample(both.duration(), &mut q, None);
+    /// assert!((q[0] + 1.0).abs() < 1e-9);
+    /// assert!(leg(0.0, 1.0)?.then(leg(0.5, 1.0)?).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn then(mut self, next: Trajectory) -> Result<Trajectory, TrajectoryError> {
+        check_dim_of("the second motion", self.dim, next.dim)?;
+        let (mut q_end, mut v_end) = (vec![0.0; self.dim], vec![0.0; self.dim]);
+        let (mut q_start, mut v_start) = (vec![0.0; self.dim], vec![0.0; self.dim]);
+        self.sample(self.duration(), &mut q_end, Some(&mut v_end));
+        next.sample(0.0, &mut q_start, Some(&mut v_start));
+        for i in 0..self.dim {
+            if (q_end[i] - q_start[i]).abs() > 1e-6 || v_end[i].abs() > 1e-6 || v_start[i].abs() > 1e-6 {
+                return Err(TrajectoryError::Discontinuous {
+                    index: i,
+                    end: q_end[i],
+                    start: q_start[i],
+                    v_end: v_end[i],
+                    v_start: v_start[i],
+                });
+            }
+        }
+        self.spans.extend(next.spans);
+        self.recompute_ends();
+        Ok(self)
     }
 
     /// A jerk-limited motion (Ruckig) from rest at the first waypoint to rest at the last that

@@ -259,13 +259,15 @@ pub struct GripperConfig {
     pub closed: Vec<f64>,
 }
 
-/// Friction coefficient of gripper finger pads (rubber on wood, metal or ceramic is about
-/// 0.8–1.2); it wins over the other surface's coefficient in a contact.
+/// Friction coefficient of gripper finger pads: soft silicone rubber, whose static friction
+/// on wood, metal or ceramic is about 1–2 (hard rubber 0.8–1.2); it wins over the other
+/// surface's coefficient in a contact. With 1.0 a pinched drawer handle slid out of the
+/// fingers during the pull once contacts were recomputed every millimetre.
 ///
 /// ```
 /// assert!(hearth_sim::world::FINGER_PAD_FRICTION >= 1.0);
 /// ```
-pub const FINGER_PAD_FRICTION: f64 = 1.0;
+pub const FINGER_PAD_FRICTION: f64 = 1.5;
 
 impl GripperConfig {
     /// The gripper of a built-in robot (`panda`, `fetch`, `locobot`).

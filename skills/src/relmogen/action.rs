@@ -1,7 +1,7 @@
 //! The action of the ReLMoGen env: its [`ActionSpec`] (space and decoding) and the [`Subgoal`]
 //! an action asks for.
 //!
-//! **Continuous** (ReLMoGen-R), 7 entries in [−1, 1]:
+//! **Continuous** (ReLMoGen-R), 8 entries in [−1, 1]:
 //!
 //! | entry | meaning | scaling |
 //! |---|---|---|
@@ -12,6 +12,7 @@
 //! | 4 | arm u | (x + 1) / 2 × (W − 1), rounded |
 //! | 5 | arm v | (x + 1) / 2 × (H − 1), rounded |
 //! | 6 | push direction | × π rad: horizontal direction in the robot frame |
+//! | 7 | push mode | > 0: along −normal (straight into the surface; entry 6 unused), else entry 6 |
 //!
 //! **Discrete** (ReLMoGen-D), 1 entry: an index into two score maps at quarter resolution,
 //! each `H/4 × W/4 × D` (D = `direction_bins`). With `m = (H/4)·(W/4)·D`:
@@ -28,6 +29,9 @@ use hearth_kinematics::wrap_angle;
 use hearth_sim::env::{DType, Space};
 
 use super::config::{ActionForm, ReLMoGenError, ReLMoGenResult};
+
+/// Entries of the continuous action.
+const CONTINUOUS_LEN: usize = 8;
 
 /// The direction of an arm subgoal's push.
 ///
@@ -133,7 +137,7 @@ impl ActionSpec {
         (self.width / 4) as usize * (self.height / 4) as usize * self.bins
     }
 
-    /// The action space: a box of 7 entries in [−1, 1], or 1 integer entry in
+    /// The action space: a box of 8 entries in [−1, 1], or 1 integer entry in
     /// [0, 2·[`ActionSpec::map_size`] − 1].
     ///
     /// ```
@@ -141,11 +145,11 @@ impl ActionSpec {
     /// let spec = ActionSpec { form: ActionForm::Discrete, width: 64, height: 48, bins: 4, max_base_distance: 2.0 };
     /// assert_eq!(spec.space().shape, vec![1]);
     /// let c = ActionSpec { form: ActionForm::Continuous, ..spec };
-    /// assert_eq!(c.space().shape, vec![7]);
+    /// assert_eq!(c.space().shape, vec![8]);
     /// ```
     pub fn space(&self) -> Space {
         match self.form {
-            ActionForm::Continuous => Space::boxed("action", &[7], DType::F32, -1.0, 1.0),
+            ActionForm::Continuous => Space::boxed("action", &[CONTINUOUS_LEN], DType::F32, -1.0, 1.0),
             ActionForm::Discrete => Space::boxed("action", &[1], DType::U32, 0.0, (2 * self.map_size() - 1) as f64),
         }
     }
@@ -210,13 +214,17 @@ impl ActionSpec {
                 if let Some((k, x)) = action.iter().enumerate().find(|(_, x)| x.abs() > 1.0) {
                     return Err(ReLMoGenError::BadAction(format!("entry {k} = {x} is outside [-1, 1]")));
                 }
-                let a: [f64; 7] = std::array::from_fn(|k| f64::from(action[k]));
+                let a: [f64; CONTINUOUS_LEN] = std::array::from_fn(|k| f64::from(action[k]));
                 let unit = |x: f64| (x + 1.0) * 0.5;
                 if a[0] > 0.0 {
                     Ok(Subgoal::Arm {
                         u: (unit(a[4]) * f64::from(self.width - 1)).round() as u32,
                         v: (unit(a[5]) * f64::from(self.height - 1)).round() as u32,
-                        direction: PushDirection::Horizontal(a[6] * PI),
+                        direction: if a[7] > 0.0 {
+                            PushDirection::AgainstNormal
+                        } else {
+                            PushDirection::Horizontal(a[6] * PI)
+                        },
                     })
                 } else {
                     Ok(Subgoal::Base {

@@ -84,7 +84,7 @@ pub(crate) fn io_error(path: &Path, e: impl std::fmt::Display) -> ReLMoGenError 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ActionForm {
-    /// A box of 7 entries in [−1, 1] (ReLMoGen-R).
+    /// A box of 8 entries in [−1, 1] (ReLMoGen-R).
     #[default]
     Continuous,
     /// One index into the base and arm score maps (ReLMoGen-D).

@@ -8,10 +8,15 @@
 //! fields, config keys and dataset format.
 //!
 //! ```
-//! use hearth_skills::relmogen::{ActionForm, ActionSpec, Subgoal};
+//! use hearth_skills::relmogen::{ActionForm, ActionSpec, PushDirection, Subgoal};
 //! let spec = ActionSpec { form: ActionForm::Continuous, width: 64, height: 64, bins: 8, max_base_distance: 2.0 };
-//! let s = spec.decode(&[-1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+//! let s = spec.decode(&[-1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
 //! assert_eq!(s, Subgoal::Base { bearing: 0.0, distance: 2.0, yaw: 0.0 });
+//! // An arm subgoal at the image centre, pushing straight into the surface seen there.
+//! let s = spec.decode(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]).unwrap();
+//! assert_eq!(s, Subgoal::Arm { u: 32, v: 32, direction: PushDirection::AgainstNormal });
+//! let s = spec.decode(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, -1.0]).unwrap();
+//! assert_eq!(s, Subgoal::Arm { u: 32, v: 32, direction: PushDirection::Horizontal(std::f64::consts::FRAC_PI_2) });
 //! ```
 
 mod action;
