@@ -703,7 +703,8 @@ fn story_stages(
             .min_by(|a, b| a.z.total_cmp(&b.z))
             .ok_or_else(|| SkillError::Unreachable(format!("no sink basin in `{}`", cast.counter.name)))?;
         // Set down on the basin's floor, or failing that let go 8 cm above it (the bowl drops
-        // into the basin); no placement within reach from here: the same from another spot.
+        // into the basin); no placement within reach from here, or the arm brushed the
+        // counter on the way: the same from another spot.
         let mut stands = vec![sink_stand];
         let mut drop = false;
         let p = loop {
@@ -716,9 +717,13 @@ fn story_stages(
                 Err(SkillError::Unreachable(_) | SkillError::IkFailed(_) | SkillError::PlanningFailed(_)) if !drop => {
                     drop = true;
                 }
-                Err(e @ (SkillError::Unreachable(_) | SkillError::IkFailed(_) | SkillError::PlanningFailed(_)))
-                    if stands.len() < MAX_STANDS =>
-                {
+                // A brush against the counter on the way: the same from another spot.
+                Err(
+                    e @ (SkillError::Unreachable(_)
+                    | SkillError::IkFailed(_)
+                    | SkillError::PlanningFailed(_)
+                    | SkillError::Collision(_)),
+                ) if stands.len() < MAX_STANDS && arm.held().is_some() => {
                     let goal = restand(
                         r,
                         &nav,
@@ -750,7 +755,9 @@ fn story_stages(
                 rest.x, rest.y, rest.z, basin.z
             )));
         }
-        tuck_arm(r, &mut arm, exec, counter, &mut rng)?;
+        // Back off and bring the arm in, with the stow's retries (the arm may brush the
+        // counter's front on its way in).
+        stow(r, &nav, &mut arm, exec, counter, &mut rng)?;
         Ok((
             (),
             format!(
