@@ -262,7 +262,7 @@ pub struct GripperConfig {
 /// Friction coefficient of gripper finger pads: soft silicone rubber, whose static friction
 /// on wood, metal or ceramic is about 1–2 (hard rubber 0.8–1.2); it wins over the other
 /// surface's coefficient in a contact. With 1.0 a pinched drawer handle slid out of the
-/// fingers during the pull once contacts were recomputed every millimetre.
+/// fingers during the pull once contacts were recomputed every 2 mm.
 ///
 /// ```
 /// assert!(hearth_sim::world::FINGER_PAD_FRICTION >= 1.0);

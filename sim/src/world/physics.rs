@@ -134,7 +134,7 @@ impl std::fmt::Debug for World {
 
 /// Relative motion (m) below which the physics keeps a touching pair's contacts without
 /// recomputing them.
-const CONTACT_RECYCLE_DISTANCE: Real = 0.001;
+const CONTACT_RECYCLE_DISTANCE: Real = 0.002;
 
 impl World {
     /// An empty world (with a ground box when `config.ground_plane`).
@@ -149,7 +149,8 @@ impl World {
             // Rapier keeps a touching pair's contacts, unrecomputed, until the two shapes have
             // moved 5 cm relative to each other (contact recycling). A finger that closes at
             // 5 cm/s on a bowl it already touches elsewhere then slides through the bowl's
-            // wall unseen. 1 mm keeps most of the saving for resting objects.
+            // wall unseen. 2 mm (less than half such a wall) keeps the saving for resting
+            // objects.
             normalized_contact_recycle_distance: CONTACT_RECYCLE_DISTANCE,
             ..IntegrationParameters::default()
         };
