@@ -28,10 +28,8 @@ fn cheap(task: &str) -> EnvConfig {
 }
 
 fn model_named(env: &Env, name: &str) -> ModelHandle {
-    let world = env.world();
-    world
-        .models()
-        .find(|&h| world.model_name(h).is_ok_and(|n| n == name))
+    env.world()
+        .model_named(name)
         .unwrap_or_else(|| panic!("no model `{name}`"))
 }
 

@@ -545,6 +545,26 @@ impl World {
         (0..self.state.models.len()).map(ModelHandle::from_index)
     }
 
+    /// The first spawned model with instance name `name`, if any.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let robot = world.spawn_model(&fetch, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// assert_eq!(world.model_named(world.model_name(robot)?), Some(robot));
+    /// assert_eq!(world.model_named("no such model"), None);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn model_named(&self, name: &str) -> Option<ModelHandle> {
+        self.state
+            .models
+            .iter()
+            .position(|e| e.name == name)
+            .map(ModelHandle::from_index)
+    }
+
     /// The bodies of a model (one per group of welded links).
     ///
     /// # Errors
