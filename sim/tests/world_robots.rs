@@ -471,3 +471,22 @@ fn self_collision_ignores_adjacent_links() {
         assert!((a - b).abs() < 1e-2, "adjacent links touch but must not push: {q:?}");
     }
 }
+
+#[test]
+fn a_slow_velocity_command_keeps_its_joint_moving() {
+    // 0.05 rad/s is below the speed at which a body may fall asleep; the motor must not be put
+    // to sleep with it.
+    let panda = RobotModel::builtin("panda").unwrap();
+    let mut world = world();
+    let arm = world
+        .spawn_model(&panda, &Isometry3::identity(), SpawnOptions::fixed())
+        .unwrap();
+    steps(&mut world, 90);
+    let q0 = world.joint_positions(arm).unwrap()[0];
+    world
+        .set_joint_command(arm, "panda_joint1", JointCommand::Velocity { target: 0.05 })
+        .unwrap();
+    steps(&mut world, 150); // 5 s
+    let moved = world.joint_positions(arm).unwrap()[0] - q0;
+    assert!((moved - 0.25).abs() < 0.03, "moved {moved:.3} rad in 5 s at 0.05 rad/s");
+}

@@ -358,15 +358,15 @@ fn rim_candidates(
         // which a ray could graze a face of the shape.
         let probe = |i: f64| (i + RIM_PROBE_OFFSET) * RIM_PROBE_STEP;
         // From outside inwards: the first surface must be the top (the wall's upper edge).
-        let Some(outer) = (0..=steps).rev().find(|&i| at(probe(i as f64)).is_some()) else {
+        let is_top = |z: f64| z >= top - 0.01;
+        let Some((outer, z_outer)) = (0..=steps).rev().find_map(|i| at(probe(i as f64)).map(|z| (i, z))) else {
             continue;
         };
-        let is_top = |i: usize| at(probe(i as f64)).is_some_and(|z| z >= top - 0.01);
-        if !is_top(outer) {
+        if !is_top(z_outer) {
             continue;
         }
         let mut inner = outer;
-        while inner > 0 && is_top(inner - 1) {
+        while inner > 0 && at(probe((inner - 1) as f64)).is_some_and(is_top) {
             inner -= 1;
         }
         let (s_out, s_in) = (probe(outer as f64 + 0.5), probe(inner as f64 - 0.5));
