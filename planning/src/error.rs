@@ -57,6 +57,13 @@ pub enum PlanError {
     /// [`Space::check`](crate::space::Space::check).
     #[error("bad input: {0}")]
     BadInput(String),
+    /// Post-processing produced no motion that passes the final check at the verification
+    /// resolution (see `ShortcutSettings::verify_resolution`): the state at `time` s collides.
+    #[error("the smoothed motion collides at {time:.4} s when re-checked at the verification resolution")]
+    InvalidMotion {
+        /// Time along the motion of the colliding state found (s).
+        time: f64,
+    },
 }
 
 fn describe(contact: &Option<String>) -> String {

@@ -44,6 +44,9 @@ use crate::validity::StateValidator;
 /// Parabolic shortcut attempts between fine checks.
 const ROUND: usize = 10;
 
+/// Repairs at ever finer spacing tried when a fallback motion fails the verification check.
+const VERIFY_ROUNDS: usize = 4;
+
 /// How long to shortcut and how carefully.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShortcutSettings {
@@ -53,6 +56,12 @@ pub struct ShortcutSettings {
     pub time_limit: Option<Duration>,
     /// Also check accepted shortcuts at this finer resolution (e.g. a tenth of the planner's).
     pub fine_resolution: Option<f64>,
+    /// [`smooth`] only: re-check the finished trajectory with [`Trajectory::check`] at this
+    /// resolution and return it only if it passes (falling back to the unshortcut timing of
+    /// the repaired path, see [`Smoothed::fell_back`]). Two sample sets at different spacings
+    /// can disagree about a graze shorter than either spacing; this makes the returned motion
+    /// pass exactly the check a caller re-runs at this resolution.
+    pub verify_resolution: Option<f64>,
 }
 
 impl Default for ShortcutSettings {
@@ -61,6 +70,7 @@ impl Default for ShortcutSettings {
             attempts: 100,
             time_limit: None,
             fine_resolution: None,
+            verify_resolution: None,
         }
     }
 }
@@ -334,13 +344,22 @@ pub struct Smoothed {
     pub random: ShortcutStats,
     /// Parabolic shortcutting statistics.
     pub parabolic: ShortcutStats,
+    /// Whether the shortcut trajectory failed the check at
+    /// [`ShortcutSettings::verify_resolution`] and an unshortcut rest-to-rest timing (of the
+    /// repaired path, or of that path repaired again more finely), which passed it, was
+    /// returned instead.
+    pub fell_back: bool,
 }
 
 /// The post-processing pipeline from a planner's path to an executable trajectory: random
 /// shortcutting at the motion validator's resolution (unless `smoothing` is `None`), [`repair`]
 /// of the result at `settings.fine_resolution` (when set, within `repair_budget`), timing
 /// within `limits`, and, for `Parabolic`, acceleration-bounded shortcutting whose ramps are
-/// checked at both resolutions.
+/// checked at both resolutions. With `settings.verify_resolution`, the finished trajectory is
+/// checked once more at that resolution; when the shortcut one fails (a graze between the
+/// samples of the earlier checks) the rest-to-rest timing of the repaired path is returned if
+/// it passes, else that of the path repaired at half, a quarter, … of the verification spacing
+/// (within what is left of `repair_budget`), and [`PlanError::InvalidMotion`] if none passes.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -378,6 +397,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     repair_budget: Duration,
     rng: &mut R,
 ) -> Result<Smoothed, PlanError> {
+    let started = std::time::Instant::now();
     let space = motion.space().clone();
     let bad = |e: TrajectoryError| PlanError::BadInput(e.to_string());
     // Random shortcuts at the coarse resolution, then one fine pass over what is left.
@@ -392,15 +412,54 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         current = p;
         out_random = s;
     }
-    let (mut current, repaired) = match settings.fine_resolution {
+    let (repaired_path, repaired) = match settings.fine_resolution {
         Some(r) => repair(&space, validator, &current, r, repair_budget, rng)?,
         None => (current, 0),
     };
-    let mut trajectory = Trajectory::rest_to_rest(&space, &current, limits).map_err(bad)?;
+    let rest_to_rest = Trajectory::rest_to_rest(&space, &repaired_path, limits).map_err(bad)?;
+    let mut trajectory = rest_to_rest.clone();
+    let mut current = repaired_path.clone();
     let mut out_parabolic = ShortcutStats::default();
     if smoothing == Smoothing::Parabolic {
         out_parabolic = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad)?;
         current = trajectory.to_path(&space, motion.resolution());
+    }
+    let mut fell_back = false;
+    if let Some(r) = settings.verify_resolution
+        && trajectory.check(&space, validator, r).is_err()
+    {
+        // Fall back to the unshortcut timing of the repaired path. A path pulled taut by
+        // shortcuts can slide along a surface, where samples at one spacing pass and samples
+        // at another graze; so if the fallback fails too, repair it at half the spacing and
+        // try again (a few times). Whatever is returned has passed the very check the caller
+        // re-runs.
+        fell_back = true;
+        let (mut candidate, mut candidate_path) = (rest_to_rest, repaired_path);
+        let mut spacing = r;
+        let mut verified = false;
+        for _ in 0..VERIFY_ROUNDS {
+            let failure = match candidate.check(&space, validator, r) {
+                Ok(()) => {
+                    verified = true;
+                    break;
+                }
+                Err(e) => e,
+            };
+            spacing /= 2.0;
+            let left = repair_budget.saturating_sub(started.elapsed());
+            match repair(&space, validator, &candidate_path, spacing, left, rng) {
+                Ok((p, _)) => {
+                    candidate = Trajectory::rest_to_rest(&space, &p, limits).map_err(bad)?;
+                    candidate_path = p;
+                }
+                Err(_) => return Err(invalid_motion(failure)),
+            }
+        }
+        if !verified {
+            candidate.check(&space, validator, r).map_err(invalid_motion)?;
+        }
+        trajectory = candidate;
+        current = candidate_path;
     }
     Ok(Smoothed {
         trajectory,
@@ -408,5 +467,13 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         repaired,
         random: out_random,
         parabolic: out_parabolic,
+        fell_back,
     })
+}
+
+fn invalid_motion(e: TrajectoryError) -> PlanError {
+    match e {
+        TrajectoryError::InCollision { time } => PlanError::InvalidMotion { time },
+        other => PlanError::BadInput(other.to_string()),
+    }
 }

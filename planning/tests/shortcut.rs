@@ -207,6 +207,83 @@ fn repair_replaces_edges_that_fail_finely() {
     assert!(fixed.states.iter().any(|q| q[1] >= 0.9));
 }
 
+/// A band 0.2 mm thick across the left of the square: sampled checks at millimetre spacing
+/// mostly miss it, a check at 0.1 mm spacing cannot (consecutive samples are closer than it
+/// is thick).
+struct Band {
+    checks: u64,
+}
+
+impl StateValidator for Band {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        !((0.5..=0.5002).contains(&q[1]) && q[0] < 0.25)
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+#[test]
+fn smoothing_returns_only_motions_that_pass_the_verification_check() {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    // The zig-zag passes the band on its right; shortcuts cut across the left.
+    let zigzag = Path {
+        states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]],
+    };
+    let space = square();
+    let limits = limits2();
+    let settings = ShortcutSettings {
+        attempts: 100,
+        fine_resolution: Some(0.005),
+        ..Default::default()
+    };
+    let verify = 1e-4;
+    let (mut unverified_fails, mut fell_back) = (0, 0);
+    for seed in 0..8 {
+        let run = |settings: &ShortcutSettings| {
+            let mut motion = MotionValidator::new(space.clone(), 0.01);
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            smooth(
+                Smoothing::Parabolic,
+                &mut motion,
+                &mut Band { checks: 0 },
+                &zigzag,
+                &limits,
+                settings,
+                std::time::Duration::from_secs(1),
+                &mut rng,
+            )
+            .expect("the zig-zag itself is clear")
+        };
+        let plain = run(&settings);
+        assert!(!plain.fell_back, "no verification asked for");
+        if plain.trajectory.check(&space, &mut Band { checks: 0 }, verify).is_err() {
+            unverified_fails += 1;
+        }
+        let verified = run(&ShortcutSettings {
+            verify_resolution: Some(verify),
+            ..settings.clone()
+        });
+        assert!(
+            verified
+                .trajectory
+                .check(&space, &mut Band { checks: 0 }, verify)
+                .is_ok(),
+            "seed {seed}: the returned motion fails the verification check"
+        );
+        if verified.fell_back {
+            fell_back += 1;
+        }
+    }
+    // The band does slip between the shortcutter's samples, and verification catches it.
+    assert!(
+        unverified_fails > 0,
+        "the band never slipped through: the test shows nothing"
+    );
+    assert_eq!(fell_back, unverified_fails);
+}
+
 #[test]
 fn jerk_limited_stops_stay_on_edges_and_respect_limits() {
     let space = square();

@@ -762,6 +762,7 @@ impl Arm {
                 attempts: self.settings.shortcut_attempts,
                 time_limit: None,
                 fine_resolution: Some(self.settings.resolution / 10.0),
+                verify_resolution: Some(self.settings.resolution / 10.0),
             },
             Duration::from_secs(1),
             rng,

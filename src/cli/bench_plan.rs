@@ -243,6 +243,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             // Verified at half the re-check spacing so that a graze shorter than the
                             // re-check spacing rarely slips between both sample sets.
                             fine_resolution: Some(fine_resolution / 2.0),
+                            // The returned motion passes the very re-check below.
+                            verify_resolution: Some(fine_resolution),
                         };
                         let smoothing = match a.shortcut {
                             ShortcutKind::None => Smoothing::None,
@@ -266,7 +268,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         match smoothed {
                             Err(e) => {
                                 row["success"] = json!(false);
-                                row["error"] = json!(format!("repair at the fine resolution failed: {e}"));
+                                row["error"] = json!(match e {
+                                    hearth_planning::PlanError::InvalidMotion { .. } => e.to_string(),
+                                    _ => format!("repair at the fine resolution failed: {e}"),
+                                });
                             }
                             Ok(out) => {
                                 // Re-validate at 10x finer resolution, the whole timed motion.
@@ -279,6 +284,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                     ));
                                 }
                                 row["repaired_edges"] = json!(out.repaired);
+                                row["smoothing_fell_back"] = json!(out.fell_back);
                                 row["path_length"] = json!(out.trajectory.length(&space, a.resolution));
                                 row["duration_s"] = json!(out.trajectory.duration());
                                 if a.emit_paths {

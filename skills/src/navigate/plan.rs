@@ -254,6 +254,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
             attempts: settings.shortcut_attempts,
             time_limit: None,
             fine_resolution: None,
+            verify_resolution: None,
         };
         // Each stretch is shortcut with the validator it was planned with, so a narrow
         // passage comes out straight too (the whole-path pass below keeps the full margin).
@@ -282,6 +283,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
         attempts: settings.shortcut_attempts,
         time_limit: None,
         fine_resolution: None,
+        verify_resolution: None,
     };
     let (path, _) = shortcut_random(&mut motion, &mut validity, &Path { states: out }, &shortcut, rng);
     let mut poses: Vec<[f64; 3]> = Vec::with_capacity(path.states.len());
