@@ -240,10 +240,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         let settings = ShortcutSettings {
                             attempts: a.shortcut_attempts,
                             time_limit: None,
-                            // Verified at half the re-check spacing so that a graze shorter than the
-                            // re-check spacing rarely slips between both sample sets.
-                            fine_resolution: Some(fine_resolution / 2.0),
-                            // The returned motion passes the very re-check below.
+                            // Ramps are checked at the re-check's spacing; a graze between
+                            // the two sample sets is caught by the final verification, so
+                            // the returned motion passes the very re-check below.
+                            fine_resolution: Some(fine_resolution),
                             verify_resolution: Some(fine_resolution),
                         };
                         let smoothing = match a.shortcut {
