@@ -93,8 +93,11 @@ fn planners(c: &mut Criterion) {
             paths.push((i, s.path));
         }
     }
+    // As `hearth bench plan`: ramps checked at a tenth of the planning resolution, and the
+    // finished motion verified there.
     let settings = ShortcutSettings {
-        fine_resolution: Some(RESOLUTION / 20.0),
+        fine_resolution: Some(RESOLUTION / 10.0),
+        verify_resolution: Some(RESOLUTION / 10.0),
         ..Default::default()
     };
     let mut g = c.benchmark_group("smooth/panda_table_pick");
