@@ -284,6 +284,58 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
     assert_eq!(fell_back, unverified_fails);
 }
 
+/// A band 0.2 mm thick across the whole square: every path from bottom to top crosses it.
+struct Wall {
+    checks: u64,
+}
+
+impl StateValidator for Wall {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        !(0.5..=0.5002).contains(&q[1])
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+#[test]
+fn smoothing_reports_a_motion_that_no_fallback_can_verify() {
+    use hearth_planning::PlanError;
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    // Checks at 5 mm miss the band, so the zig-zag passes the coarse and fine checks; the
+    // verification at 0.1 mm finds it, and no repair can get around a wall.
+    let zigzag = Path {
+        states: vec![vec![0.0, 0.0], vec![0.5, 0.503], vec![0.0, 1.0]],
+    };
+    let settings = ShortcutSettings {
+        fine_resolution: Some(0.005),
+        verify_resolution: Some(1e-4),
+        ..Default::default()
+    };
+    for smoothing in [Smoothing::None, Smoothing::Parabolic] {
+        let mut motion = MotionValidator::new(square(), 0.01);
+        let mut rng = Pcg64Mcg::seed_from_u64(0);
+        let out = smooth(
+            smoothing,
+            &mut motion,
+            &mut Wall { checks: 0 },
+            &zigzag,
+            &limits2(),
+            &settings,
+            std::time::Duration::from_millis(200),
+            &mut rng,
+        );
+        match out {
+            Err(PlanError::InvalidMotion { time }) => assert!(time > 0.0, "{smoothing:?}: time {time}"),
+            other => panic!(
+                "{smoothing:?}: expected InvalidMotion, got {:?}",
+                other.map(|o| o.fell_back)
+            ),
+        }
+    }
+}
+
 #[test]
 fn jerk_limited_stops_stay_on_edges_and_respect_limits() {
     let space = square();
