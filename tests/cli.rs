@@ -423,6 +423,42 @@ fn bench_plan_writes_results_json() {
     let p1 = results.iter().find(|r| r["id"] == 1).unwrap();
     assert!(p1.get("success").is_some() || p1.get("skipped").is_some(), "{p1}");
     assert!(v["summary"]["table_pick"]["plans"].as_u64() == Some(2));
+    assert!(
+        v["summary"]["table_pick"]["smoothing_fell_back"].is_u64(),
+        "{}",
+        v["summary"]
+    );
+    // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
+    let only = dir.join("only.json");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+        .args(["bench", "plan", "--problems", data, "--only", "table_pick:41", "--json"])
+        .arg(&only)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&only).unwrap()).unwrap();
+    let ids: Vec<_> = v["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["id"].clone())
+        .collect();
+    assert_eq!(ids, vec![serde_json::json!(41)]);
+    for (selector, says) in [
+        ("table_pick:7", "no such problem"),
+        ("bookshelf", "no such problem"),
+        ("table_pick:x", "not a problem id"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+            .args(["bench", "plan", "--problems", data, "--only", selector])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(says) && !err.contains("panicked"),
+            "{selector}: {err}"
+        );
+    }
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
         .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])
         .output()

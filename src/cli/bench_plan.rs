@@ -75,12 +75,35 @@ pub struct BenchPlanArgs {
     /// Plans per problem.
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Only these problems: `FAMILY` (a whole family) or `FAMILY:ID` (one problem), e.g.
+    /// `--only table_under_pick:13 cage`.
+    #[arg(long, num_args = 1..)]
+    only: Vec<String>,
     /// Include every path's waypoints in the JSON.
     #[arg(long)]
     emit_paths: bool,
     /// Write results as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// `--only` selectors: (family, optional problem id).
+fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>> {
+    only.iter()
+        .map(|s| match s.split_once(':') {
+            None if !s.is_empty() => Ok((s.clone(), None)),
+            Some((family, id)) if !family.is_empty() => id
+                .parse::<u32>()
+                .map(|id| (family.to_owned(), Some(id)))
+                .map_err(|_| anyhow::anyhow!("--only {s}: `{id}` is not a problem id (expected FAMILY or FAMILY:ID)")),
+            _ => bail!("--only `{s}`: expected FAMILY or FAMILY:ID"),
+        })
+        .collect()
+}
+
+/// Whether problem `id` of `family` passes the selectors (all pass when there are none).
+fn selected(selectors: &[(String, Option<u32>)], family: &str, id: u32) -> bool {
+    selectors.is_empty() || selectors.iter().any(|(f, i)| f == family && i.is_none_or(|i| i == id))
 }
 
 struct RobotSetup {
@@ -166,6 +189,21 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             let s = ProblemSet::load(p)?;
             let joints = p.parent().map(|d| d.join("joints.json")).filter(|j| j.is_file());
             sets.push((s, joints));
+        }
+    }
+    let selectors = parse_selectors(&a.only)?;
+    for (set, _) in &mut sets {
+        set.problems.retain(|p| selected(&selectors, &set.family, p.id));
+    }
+    for (family, id) in &selectors {
+        let found = sets
+            .iter()
+            .any(|(s, _)| &s.family == family && s.problems.iter().any(|p| id.is_none_or(|i| p.id == i)));
+        if !found {
+            bail!(
+                "--only {family}{}: no such problem among the files given",
+                id.map(|i| format!(":{i}")).unwrap_or_default()
+            );
         }
     }
     let total: usize = sets.iter().map(|(s, _)| s.problems.len()).sum::<usize>() * a.repeat as usize;
@@ -329,6 +367,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         let shortcut = column("shortcut_time_s", 1e3);
         let durations = column("duration_s", 1.0);
         let rate = ok.len() as f64 / attempted.len().max(1) as f64;
+        let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
         println!(
             "{:<18} {:>6} {:>7} {:>8.1}% {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",
             family,
@@ -347,7 +386,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "success_rate": rate,
                    "plan_time_ms_median": percentile(&times, 0.5), "plan_time_ms_p95": percentile(&times, 0.95),
                    "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5),
-                   "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5)}),
+                   "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5),
+                   "smoothing_fell_back": fell_back}),
         );
     }
     if let Some(path) = a.json {
