@@ -152,7 +152,88 @@ impl FkProgram {
     }
 }
 
+/// Some links of a model, for [`RobotModel::fk_update`]: recomputing only the links a planned
+/// chain moves (the base, wheels and head of a mobile manipulator keep their poses).
+///
+/// ```
+/// use hearth_kinematics::{Chain, RobotModel};
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// let arm = Chain::named(&fetch, "arm").unwrap();
+/// let wrist = fetch.link_index("wrist_roll_link").unwrap();
+/// let below = fetch.fk_subset(|l| fetch.joints_to(l).iter().any(|&j| arm.joints().contains(&j)));
+/// assert!(below.contains(wrist) && below.len() < fetch.links().len());
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FkSubset {
+    /// Op indices in evaluation order (op `i` computes link `i + 1`).
+    ops: Vec<u32>,
+    /// Links of the model it was made for.
+    links: usize,
+}
+
+impl FkSubset {
+    /// Number of links in the subset.
+    pub fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// Whether the subset has no link.
+    pub fn is_empty(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// Whether link `link` is in the subset.
+    pub fn contains(&self, link: usize) -> bool {
+        link > 0 && self.ops.binary_search(&((link - 1) as u32)).is_ok()
+    }
+}
+
 impl RobotModel {
+    /// The links for which `select(link)` holds (the root is never part of a subset: it is
+    /// where [`RobotModel::fk_from`] places the robot).
+    pub fn fk_subset(&self, mut select: impl FnMut(usize) -> bool) -> FkSubset {
+        FkSubset {
+            ops: (1..self.0.links.len())
+                .filter(|&l| select(l))
+                .map(|l| (l - 1) as u32)
+                .collect(),
+            links: self.0.links.len(),
+        }
+    }
+
+    /// Recomputes the poses of `subset`'s links for configuration `q`, keeping every other
+    /// pose in `poses` as it is: those must be current (from an earlier
+    /// [`RobotModel::fk_from`] with the same base and the same values of the joints that move
+    /// them). Cheaper than a full pass when few links move. Does not allocate.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, RobotModel};
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let arm = Chain::named(&fetch, "arm").unwrap();
+    /// let moving = fetch.fk_subset(|l| fetch.joints_to(l).iter().any(|&j| arm.joints().contains(&j)));
+    /// let mut q = fetch.neutral_configuration();
+    /// let (mut full, mut partial) = (fetch.pose_buffer(), fetch.pose_buffer());
+    /// fetch.fk(&q, &mut partial).unwrap();
+    /// arm.scatter(&[0.3, -0.5, 0.2, 1.0, 0.1, 0.4, -0.2], &mut q);
+    /// fetch.fk_update(&moving, &q, &mut partial).unwrap();
+    /// fetch.fk(&q, &mut full).unwrap();
+    /// assert!(full.iter().zip(&partial).all(|(a, b)| (a.translation.vector - b.translation.vector).norm() < 1e-12));
+    /// ```
+    pub fn fk_update(&self, subset: &FkSubset, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
+        self.check_configuration(q)?;
+        for (what, got) in [("pose buffer", poses.len()), ("link subset's model", subset.links)] {
+            if got != self.0.links.len() {
+                return Err(crate::KinematicsError::DimensionMismatch {
+                    what,
+                    expected: self.0.links.len(),
+                    got,
+                });
+            }
+        }
+        self.0.fk.run_subset(&subset.ops, q, poses);
+        Ok(())
+    }
+
     /// Forward kinematics: writes the world pose of every link into `poses`, with the root at
     /// the origin. `poses` must have one entry per link ([`RobotModel::pose_buffer`]).
     ///

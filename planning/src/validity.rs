@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
+use hearth_kinematics::{Chain, FkSubset, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
 use nalgebra::{Isometry3, Point3};
 use parry3d::math::Vector;
 use parry3d::shape::{Ball, SharedShape};
@@ -119,6 +119,11 @@ pub struct RobotValidity {
     /// Whether the links and pairs that never move with the chain are clear, once known for
     /// the current reference, base and obstacles.
     fixed_clear: Option<bool>,
+    /// The links that move with the chain: after one full pass for the current reference and
+    /// base, forward kinematics recomputes only these.
+    moving_fk: FkSubset,
+    /// Whether `poses` of the links that do not move are current.
+    fixed_poses_current: bool,
 }
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
@@ -270,6 +275,7 @@ impl RobotValidity {
         let pairs = matrix.checked_geometric_pairs(&model);
         let broad = BroadPhase::new(&model, &geometric, &pairs);
         let moves = moving_links(&model, &chain);
+        let moving_fk = model.fk_subset(|l| moves[l]);
         let link_moves = geometric.iter().map(|&l| moves[l]).collect();
         let pair_moves = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         Self {
@@ -277,6 +283,8 @@ impl RobotValidity {
             link_moves,
             pair_moves,
             fixed_clear: None,
+            moving_fk,
+            fixed_poses_current: false,
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -301,6 +309,7 @@ impl RobotValidity {
         self.model.check_configuration(q_full)?;
         self.q_full.copy_from_slice(q_full);
         self.fixed_clear = None;
+        self.fixed_poses_current = false;
         Ok(())
     }
 
@@ -316,6 +325,7 @@ impl RobotValidity {
     pub fn set_base(&mut self, base: Isometry3<f64>) {
         self.base = base;
         self.fixed_clear = None;
+        self.fixed_poses_current = false;
     }
 
     /// Attaches an object (a held object moves with the gripper). It is checked against the
@@ -334,7 +344,14 @@ impl RobotValidity {
             return false;
         }
         self.chain.scatter(q, &mut self.q_full);
-        self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok()
+        if self.fixed_poses_current {
+            return self
+                .model
+                .fk_update(&self.moving_fk, &self.q_full, &mut self.poses)
+                .is_ok();
+        }
+        self.fixed_poses_current = self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok();
+        self.fixed_poses_current
     }
 
     fn link_hits(&self, l: usize) -> Option<ObstacleId> {

@@ -166,3 +166,42 @@ fn fixed_links_are_rechecked_when_the_base_moves() {
     v.set_base(nalgebra::Isometry3::translation(0.0, 0.0, 0.0));
     assert!(v.is_valid(&tucked));
 }
+
+/// Joints outside the chain (here the torso under the `arm` chain) move the chain's links too:
+/// a new reference must recompute every pose, not only the links the chain moves.
+#[test]
+fn a_new_reference_moves_the_links_above_it() {
+    use hearth_planning::obstacles::{Obstacle, ParryScene};
+    let m = hearth_kinematics::RobotModel::builtin("fetch").unwrap();
+    let arm = hearth_kinematics::Chain::named(&m, "arm").unwrap();
+    let torso = m.variable_names().iter().position(|n| n == "torso_lift_joint").unwrap();
+    let gripper = m.link_index("gripper_link").unwrap();
+    let (mut low, mut high) = (m.neutral_configuration(), m.neutral_configuration());
+    low[torso] = 0.0;
+    high[torso] = 0.38;
+    let mut poses = m.pose_buffer();
+    m.fk(&high, &mut poses).unwrap();
+    let g = poses[gripper].translation.vector;
+    // A small block where the gripper is with the torso up, 0.38 m above it with the torso down.
+    let block = Obstacle::cuboid(
+        "block",
+        parry3d::math::Pose::translation(g.x as f32, g.y as f32, g.z as f32),
+        parry3d::math::Vector::new(0.03, 0.03, 0.03),
+    );
+    let acm = hearth_kinematics::SelfCollisionMatrix::compute(
+        &m,
+        &hearth_kinematics::SelfCollisionSettings {
+            samples: 300,
+            ..Default::default()
+        },
+    );
+    let mut v = RobotValidity::new(arm.clone(), acm, std::sync::Arc::new(ParryScene::new(vec![block])));
+    let mut q = vec![0.0; arm.dof()];
+    arm.gather(&high, &mut q);
+    v.set_reference(&low).unwrap();
+    assert!(v.is_valid(&q), "torso down: the gripper is below the block");
+    v.set_reference(&high).unwrap();
+    assert!(!v.is_valid(&q), "torso up: the gripper is in the block");
+    v.set_reference(&low).unwrap();
+    assert!(v.is_valid(&q));
+}
