@@ -144,10 +144,20 @@ impl FkProgram {
     /// Runs only the ops listed (each op's parent must already be computed).
     #[inline]
     pub(crate) fn run_subset(&self, subset: &[u32], q: &[f64], poses: &mut [Isometry3<f64>]) {
+        // As in `run`: along a serial stretch the parent is the pose just computed.
+        let mut prev_child = u32::MAX;
+        let mut prev = Isometry3::identity();
         for &i in subset {
             let op = &self.ops[i as usize];
-            let parent = poses[op.parent as usize];
-            poses[op.child as usize] = parent * op.local(q);
+            let parent = if op.parent == prev_child {
+                prev
+            } else {
+                poses[op.parent as usize]
+            };
+            let pose = parent * op.local(q);
+            poses[op.child as usize] = pose;
+            prev = pose;
+            prev_child = op.child;
         }
     }
 }
