@@ -190,3 +190,31 @@ fn snapshots_replay_split_furniture_exactly() {
     }
     assert_eq!(world.state_hash(), first);
 }
+
+#[test]
+fn mass_randomization_keeps_a_split_root_shared_half_and_half() {
+    use hearth_sim::randomize::{PhysicsRandomization, randomize_physics};
+    use rand::SeedableRng;
+    let (mut world, loaded, _) = furniture();
+    let dresser = loaded.object("dresser").unwrap();
+    let model = world.model(dresser).unwrap().clone();
+    let root = world.link_body(dresser, &model.links()[0].name).unwrap();
+    // The mount is the one body of the model without colliders.
+    let mount = world
+        .model_bodies(dresser)
+        .unwrap()
+        .into_iter()
+        .find(|b| world.bodies()[b.handle()].colliders().is_empty())
+        .expect("a free dresser has a mount");
+    let half0 = world.body_mass(root).unwrap();
+    assert!((world.body_mass(mount).unwrap() - half0).abs() < 1e-4 * half0);
+    let cfg = PhysicsRandomization {
+        enabled: true,
+        mass: true,
+        ..Default::default()
+    };
+    randomize_physics(&mut world, &loaded, &cfg, &mut rand_pcg::Pcg64Mcg::seed_from_u64(4)).unwrap();
+    let half = world.body_mass(root).unwrap();
+    assert!((half - half0).abs() > 1e-6 * half0, "the mass was drawn anew");
+    assert!((world.body_mass(mount).unwrap() - half).abs() < 1e-4 * half);
+}

@@ -595,6 +595,14 @@ impl World {
             .ok_or(WorldError::UnknownModel { handle })
     }
 
+    /// The dynamic mount that shares the mass of `body` when `body` is the root body of a model
+    /// whose free root is split off its multibody.
+    pub(crate) fn split_mount(&self, handle: ModelHandle, body: BodyId) -> Option<BodyId> {
+        let entry = self.state.models.get(handle.index())?;
+        let dynamic = self.state.bodies.get(entry.mb_root).is_some_and(|rb| rb.is_dynamic());
+        (entry.root == body.0 && entry.mb_root != entry.root && dynamic).then_some(BodyId(entry.mb_root))
+    }
+
     pub(crate) fn multibody_of(&self, handle: ModelHandle) -> Option<&Multibody> {
         let root = self.state.models.get(handle.index())?.mb_root;
         let link = self.state.multibody_joints.rigid_body_link(root)?;
