@@ -1,11 +1,11 @@
-//! The contact filter of split roots: a fixed-base model whose links move keeps the colliders
-//! of its root on a plain fixed body, outside its multibody, and this filter stands in for the
-//! multibody's own rules between that body and the model's moving links.
+//! The contact filter of split roots: a free object whose links move keeps the colliders of
+//! its root on a plain body outside its multibody (see `World::spawn_model`), and this filter
+//! stands in for the multibody's own rules between that body and the model's moving links.
 //!
-//! Why: rapier solves every contact that touches a multibody link (the multibody's fixed root
-//! included) with its generic, scalar constraint path, which also pays for the multibody's
-//! Jacobians and mass-matrix solves. Objects resting on a cabinet's carcass or a fridge's body
-//! touch only a fixed body once the root is split off, and take the SIMD two-body path.
+//! Why: rapier solves every contact that touches a multibody link with its generic, scalar
+//! constraint path, which also pays for the multibody's Jacobians and mass-matrix solves. Books
+//! on a bookcase's shelves touch only a plain body once the root is split off, and take the
+//! SIMD two-body path.
 
 use rapier3d::prelude::*;
 
@@ -16,7 +16,7 @@ pub(crate) enum BodyOwner {
     /// Not part of a split model: never filtered here.
     #[default]
     None,
-    /// The collider-carrying fixed root body of model `model`.
+    /// The collider-carrying root body of model `model`.
     Root {
         /// Model index.
         model: u32,

@@ -134,8 +134,8 @@ pub(crate) struct ModelEntry {
     pub(crate) name: String,
     pub(crate) base: BaseMode,
     pub(crate) root: RigidBodyHandle,
-    /// The body at the root of the model's multibody: `root`, or for a fixed base whose links
-    /// move, a collider-less fixed mount at the root's pose (see [`World::spawn_model`]).
+    /// The body at the root of the model's multibody: `root`, or for a split root, the
+    /// collider-less mount welded to it (see [`World::spawn_model`]).
     pub(crate) mb_root: RigidBodyHandle,
     /// Per model link: its body and its pose in that body's frame.
     pub(crate) link_bodies: Vec<(RigidBodyHandle, Pose)>,
@@ -214,17 +214,16 @@ impl World {
     /// damping and friction as joint damping and dry friction; mimic joints coupled to their
     /// leader. Every joint starts under position control holding the initial configuration.
     ///
-    /// The root of a model whose links move is split in two when the base is fixed, or free on
-    /// a model without a drive or a gripper (furniture, a laptop): the root's colliders stay on
-    /// a plain body outside the multibody, and the multibody hangs from a second,
-    /// collider-less body (the mount) at the same pose: fixed for a fixed base; for a free
-    /// one, dynamic, welded to the root body by a fixed joint, the two sharing the root's
-    /// mass properties half and half. Contacts between the root body and the links that hang
-    /// on it (all the model's links when self-collisions are off) are dropped, as the
-    /// multibody would drop them. Objects resting on such a model's root (a cabinet's carcass,
-    /// books on a bookcase's shelves) then touch a plain body, which rapier solves on its fast
-    /// two-body contact path instead of its multibody path. Robots keep their root in the
-    /// multibody.
+    /// The free root of an object whose links move (a model without a drive or a gripper on a
+    /// free base: a dresser, a bookcase, a laptop) is split in two: the root's colliders stay
+    /// on a plain dynamic body outside the multibody, and the multibody hangs from a second,
+    /// collider-less dynamic body (the mount) at the same pose, welded to the root body by a
+    /// fixed joint; the two share the root's mass properties half and half. Contacts between
+    /// the root body and the links that hang on it (all the model's links when self-collisions
+    /// are off) are dropped, as the multibody would drop them. Objects resting on such a
+    /// model's root (books on a bookcase's shelves) then touch a plain body, which rapier
+    /// solves on its fast two-body contact path instead of its multibody path. Robots and
+    /// fixed bases keep their root in the multibody.
     ///
     /// # Errors
     /// [`WorldError::InvalidModel`] when rapier refuses the articulation, and the usual
@@ -348,7 +347,7 @@ impl World {
                 mprops = MassProperties::new(parry3d::math::Vector::ZERO, 1e-3, parry3d::math::Vector::splat(1e-6));
             }
             let is_root = head == model.root();
-            if is_root && split && options.base == BaseMode::Free {
+            if is_root && split {
                 // The root's mass is shared with its mount, half each, so that the two bodies
                 // welded together weigh what the root weighs.
                 let mut total = mprops;
@@ -379,24 +378,18 @@ impl World {
         }
 
         // A split root: the multibody hangs from a collider-less mount at the root's pose,
-        // fixed for a fixed base, welded to the root body by a fixed joint for a free one.
+        // welded to the root body by a fixed joint.
         let mount = split.then(|| {
-            let builder = if options.base == BaseMode::Fixed {
-                RigidBodyBuilder::fixed()
-            } else {
-                RigidBodyBuilder::dynamic()
-                    .additional_mass_properties(mount_mprops)
-                    .can_sleep(sleeping)
-            }
-            .pose(to_pose(&(pose * link_poses[model.root()])));
+            let builder = RigidBodyBuilder::dynamic()
+                .additional_mass_properties(mount_mprops)
+                .can_sleep(sleeping)
+                .pose(to_pose(&(pose * link_poses[model.root()])));
             let mount_name = format!("{name}/{}/mount", links[model.root()].name);
             let mount = self.insert_body(&mount_name, builder, []);
-            if options.base != BaseMode::Fixed {
-                let weld = FixedJointBuilder::new().contacts_enabled(false);
-                self.state
-                    .impulse_joints
-                    .insert(body_handles[root_group], mount, weld, true);
-            }
+            let weld = FixedJointBuilder::new().contacts_enabled(false);
+            self.state
+                .impulse_joints
+                .insert(body_handles[root_group], mount, weld, true);
             mount
         });
         let all_bodies = || body_handles.iter().copied().chain(mount).collect::<Vec<_>>();
@@ -827,16 +820,17 @@ impl World {
     }
 }
 
-/// Whether a model's root is split off its multibody (see [`World::spawn_model`]): fixed bases
-/// whose links move, and free objects (no drive, no gripper) whose links move.
+/// Whether a model's root is split off its multibody (see [`World::spawn_model`]): objects (no
+/// drive, no gripper) on a free base whose links move.
+///
+/// Fixed bases keep their root in the multibody. Splitting them too saved about a tenth of a
+/// step in the benchmark home (the free roots' split about four tenths), but a mug released
+/// into a fixed counter's sink basin then tipped over (the skills' placement test), its
+/// contacts with the carcass solved on rapier's two-body path instead of the multibody path;
+/// the cause was not isolated further.
 fn split_root(model: &RobotModel, base: BaseMode, is_robot: bool) -> bool {
     let moves = model.joints().iter().any(|j| j.kind != JointKind::Fixed);
-    moves
-        && match base {
-            BaseMode::Fixed => true,
-            BaseMode::Free => !is_robot,
-            BaseMode::Holonomic => false,
-        }
+    moves && !is_robot && base == BaseMode::Free
 }
 
 /// Checks a configuration's length, finiteness and limits.
