@@ -9,6 +9,10 @@ use nalgebra::{Isometry3, Vector3};
 
 /// A free dresser and a fixed bottom cabinet side by side, a crate on the dresser's top.
 fn furniture() -> (World, LoadedScene, BodyId) {
+    furniture_with(WorldConfig::default())
+}
+
+fn furniture_with(config: WorldConfig) -> (World, LoadedScene, BodyId) {
     let mut scene = SceneFile::empty("split roots");
     scene
         .objects
@@ -16,7 +20,7 @@ fn furniture() -> (World, LoadedScene, BodyId) {
     let mut cabinet = SceneObject::new("cabinet", "bottom_cabinet", 1, [2.0, 0.0, 0.0]);
     cabinet.fixed = true;
     scene.objects.push(cabinet);
-    let mut world = World::new(WorldConfig::default()).unwrap();
+    let mut world = World::new(config).unwrap();
     let loaded = world.load_scene(&scene).unwrap();
     let dresser = loaded.object("dresser").unwrap();
     let root = world.model(dresser).unwrap().links()[0].name.clone();
@@ -218,4 +222,27 @@ fn mass_randomization_keeps_a_split_root_shared_half_and_half() {
     let half = world.body_mass(root).unwrap();
     assert!((half - half0).abs() > 1e-6 * half0, "the mass was drawn anew");
     assert!((world.body_mass(mount).unwrap() - half).abs() < 1e-4 * half);
+}
+
+#[test]
+fn without_the_split_a_free_dresser_is_one_multibody() {
+    let config = WorldConfig {
+        split_free_roots: false,
+        ..WorldConfig::default()
+    };
+    let (mut world, loaded, _) = furniture_with(config);
+    let dresser = loaded.object("dresser").unwrap();
+    let model = world.model(dresser).unwrap().clone();
+    let moving = model.joints().iter().filter(|j| j.kind != JointKind::Fixed).count();
+    let bodies = world.model_bodies(dresser).unwrap();
+    assert_eq!(bodies.len(), moving + 1, "no mount");
+    assert!(
+        bodies
+            .iter()
+            .all(|b| !world.bodies()[b.handle()].colliders().is_empty())
+    );
+    for _ in 0..10 {
+        world.step();
+    }
+    assert!(world.base_pose(dresser).unwrap().translation.z.abs() < 0.01);
 }

@@ -223,7 +223,8 @@ impl World {
     /// are off) are dropped, as the multibody would drop them. Objects resting on such a
     /// model's root (books on a bookcase's shelves) then touch a plain body, which rapier
     /// solves on its fast two-body contact path instead of its multibody path. Robots and
-    /// fixed bases keep their root in the multibody.
+    /// fixed bases keep their root in the multibody, and so does every model when
+    /// [`WorldConfig::split_free_roots`](super::WorldConfig::split_free_roots) is off.
     ///
     /// # Errors
     /// [`WorldError::InvalidModel`] when rapier refuses the articulation, and the usual
@@ -310,7 +311,8 @@ impl World {
         });
         let sleeping = self.config.sleeping;
         let root_group = group[model.root()].0;
-        let split = split_root(model, options.base, diff_drive.is_some() || gripper.is_some());
+        let split =
+            self.config.split_free_roots && split_root(model, options.base, diff_drive.is_some() || gripper.is_some());
         // Half of a free split root's mass properties: the root body's and the mount's.
         let mut mount_mprops = MassProperties::default();
         let mut body_handles = Vec::with_capacity(group_heads.len());
