@@ -17,9 +17,13 @@ fn home() -> SceneFile {
     .unwrap()
 }
 
-/// Bodies a model becomes: its root plus one per movable joint (fixed joints merge links).
-fn body_groups(model: &RobotModel) -> usize {
-    1 + model.joints().iter().filter(|j| j.kind != JointKind::Fixed).count()
+/// Bodies a model becomes: its root plus one per movable joint (fixed joints merge links),
+/// plus the mount its multibody hangs from when it is a free object whose links move (see
+/// `World::spawn_model`); robots and fixed bases keep their root in the multibody.
+fn body_groups(model: &RobotModel, is_robot: bool, fixed: bool) -> usize {
+    let moving = model.joints().iter().filter(|j| j.kind != JointKind::Fixed).count();
+    let mount = usize::from(moving > 0 && !is_robot && !fixed);
+    1 + moving + mount
 }
 
 fn loaded_home() -> (SceneFile, World, LoadedScene) {
@@ -42,7 +46,16 @@ fn generated_home_loads_settles_and_stays_above_the_floor() {
     let raised = scene.building.floors.iter().filter(|f| f.z != 0.0).count();
     let slabs = raised + scene.building.ceilings.len();
     assert_eq!(loaded.building.len(), walls + slabs);
-    let model_bodies: usize = loaded.models().map(|m| body_groups(world.model(m).unwrap())).sum();
+    let model_bodies: usize = loaded
+        .models()
+        .map(|m| {
+            let fixed = scene
+                .objects
+                .iter()
+                .any(|o| o.fixed && loaded.object(&o.name) == Some(m));
+            body_groups(world.model(m).unwrap(), Some(m) == loaded.robot, fixed)
+        })
+        .sum();
     assert_eq!(world.body_count(), 1 + walls + slabs + model_bodies);
     for &b in &loaded.building {
         assert!(world.body_name(b).unwrap().starts_with(BUILDING_PREFIX));

@@ -165,7 +165,15 @@ pub fn randomize_physics(
             }
             let dynamic = world.bodies().get(b.body.handle()).is_some_and(|rb| rb.is_dynamic());
             if cfg.mass && dynamic && b.mass > 0.0 {
-                world.set_body_mass(b.body, b.mass * d.density_factor)?;
+                let mass = b.mass * d.density_factor;
+                match world.split_mount(handle, b.body) {
+                    // A split root shares its mass with its mount, half each.
+                    Some(mount) => {
+                        world.set_body_mass(b.body, mass / 2.0)?;
+                        world.set_body_mass(mount, mass / 2.0)?;
+                    }
+                    None => world.set_body_mass(b.body, mass)?,
+                }
                 touched = true;
             }
             report.bodies += usize::from(touched);

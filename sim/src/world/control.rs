@@ -856,7 +856,7 @@ impl World {
             return;
         }
         let g = self.gravity;
-        let Some(link) = self.state.multibody_joints.rigid_body_link(entry.root).copied() else {
+        let Some(link) = self.state.multibody_joints.rigid_body_link(entry.mb_root).copied() else {
             return;
         };
         let Some(mb) = self.state.multibody_joints.get_multibody(link.multibody) else {

@@ -48,6 +48,7 @@
 //! ```
 
 mod config;
+mod contact_filter;
 mod control;
 mod error;
 mod obstacles;

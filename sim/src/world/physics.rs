@@ -7,6 +7,7 @@ use hearth_kinematics::{from_pose, to_pose};
 use rapier3d::prelude::*;
 
 use super::config::WorldConfig;
+use super::contact_filter::{BodyOwner, RootContactFilter};
 use super::error::{WorldError, WorldResult, check_finite};
 use super::spawn::ModelEntry;
 use crate::assets::Material;
@@ -80,6 +81,8 @@ pub(crate) struct State {
     /// Visual material of bodies that are not model links (building pieces), indexed like
     /// `names`.
     pub(crate) body_materials: Arc<Vec<Option<Material>>>,
+    /// What each body is to the split-root contact filter, indexed like `names`.
+    pub(crate) owners: Arc<Vec<BodyOwner>>,
     /// Shapes that are seen but not simulated (floor slabs that coincide with the ground).
     pub(crate) static_visuals: Arc<Vec<StaticVisual>>,
     /// Light sources (from the scene), for cameras.
@@ -174,6 +177,7 @@ impl World {
                 models: Vec::new(),
                 names: Arc::new(Vec::new()),
                 body_materials: Arc::new(Vec::new()),
+                owners: Arc::new(Vec::new()),
                 static_visuals: Arc::new(Vec::new()),
                 lights: Arc::new(Vec::new()),
                 ground: None,
@@ -315,6 +319,7 @@ impl World {
     pub fn step_physics(&mut self) {
         self.apply_controllers();
         let s = &mut self.state;
+        let hooks = RootContactFilter { owners: &s.owners };
         self.pipeline.step(
             self.gravity,
             &self.params,
@@ -327,7 +332,7 @@ impl World {
             &mut s.multibody_joints,
             &mut s.soft_bodies,
             &mut s.ccd,
-            &(),
+            &hooks,
             &(),
         );
         s.time += self.config.timestep;
@@ -400,6 +405,7 @@ impl World {
         let name_index = self.state.names.len() as u128;
         Arc::make_mut(&mut self.state.names).push(name.to_owned());
         Arc::make_mut(&mut self.state.body_materials).push(None);
+        Arc::make_mut(&mut self.state.owners).push(BodyOwner::None);
         let s = &mut self.state;
         let handle = Arc::make_mut(&mut s.bodies).insert(builder.user_data(name_index));
         for collider in colliders {
@@ -411,6 +417,24 @@ impl World {
         }
         self.sync_bodies(&[handle]);
         handle
+    }
+
+    /// Records what a body is to the split-root contact filter. The colliders of links whose
+    /// contacts with the root are dropped get the filter hook: rapier never recycles the
+    /// contacts of a pair with a hook, and the root's pairs with resting objects are the many.
+    pub(crate) fn set_body_owner(&mut self, handle: RigidBodyHandle, owner: BodyOwner) {
+        let s = &mut self.state;
+        let Some(rb) = s.bodies.get(handle) else { return };
+        if let Some(slot) = Arc::make_mut(&mut s.owners).get_mut(rb.user_data as usize) {
+            *slot = owner;
+        }
+        if matches!(owner, BodyOwner::Link { skip_root: true, .. }) {
+            for &ch in rb.colliders() {
+                if let Some(co) = Arc::make_mut(&mut s.colliders).get_mut(ch) {
+                    co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
+                }
+            }
+        }
     }
 
     /// Brings the colliders of teleported bodies and their broad-phase boxes up to date, so
