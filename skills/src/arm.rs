@@ -140,6 +140,22 @@ pub struct Held {
     pub shape: SharedShape,
     /// The shape's pose in the tip frame.
     pub shape_offset: Isometry3<f64>,
+    /// The object's orientation where it rested before the grasp: "upright" for placing it.
+    pub rest: UnitQuaternion<f64>,
+}
+
+impl Held {
+    /// The held object's shape pose in the object's root frame (fixed, whatever the hold).
+    ///
+    /// ```no_run
+    /// # fn f(h: &hearth_skills::arm::Held) {
+    /// let shape_in_object = h.shape_in_object();
+    /// assert!(shape_in_object.translation.vector.norm() < 1.0);
+    /// # }
+    /// ```
+    pub fn shape_in_object(&self) -> Isometry3<f64> {
+        self.offset.inverse() * self.shape_offset
+    }
 }
 
 impl std::fmt::Debug for Held {

@@ -543,6 +543,7 @@ pub fn grasp<R: Rng + ?Sized>(
         offset: tip.inverse() * object_pose,
         shape,
         shape_offset: tip.inverse() * shape_pose,
+        rest: object_pose.rotation,
     }));
     // Lift; what the object rests on is no obstacle for the first centimetres.
     let support: Vec<BodyId> = world
@@ -588,6 +589,7 @@ pub fn grasp<R: Rng + ?Sized>(
         offset: tip.inverse() * world.base_pose(object)?,
         shape,
         shape_offset: tip.inverse() * shape_pose,
+        rest: object_pose.rotation,
     }));
     Ok(report)
 }

@@ -1,9 +1,9 @@
 //! Placing the held object: a stable placement sampled on a support surface, a planned motion
 //! above it, a straight descent, release and retreat.
 //!
-//! A placement keeps the object upright (its current orientation, turned about the vertical by
-//! a sampled yaw) with its bottom `clearance` above the surface and its footprint inside the
-//! surface, clear of everything else on it. Surfaces are rectangles in the world frame: the top
+//! A placement keeps the object upright (the orientation it rested in before the grasp, turned
+//! about the vertical by a sampled yaw) with its bottom `clearance` above the surface and its
+//! footprint inside the surface, clear of everything else on it. Surfaces are rectangles in the world frame: the top
 //! of a model ([`PlaceTarget::on_top_of`]), every free top face of its collision parts (a
 //! worktop, a shelf, the floor of a sink's basin: [`PlaceTarget::surfaces_of`]), an asset's
 //! [`Surface`](hearth_sim::assets::Surface) posed in the world ([`PlaceTarget::from_surface`]),
@@ -252,7 +252,17 @@ pub struct PlaceReport {
     pub rest: Isometry3<f64>,
 }
 
+/// Placements sampled before the whole region is in play: the `k`-th sample lies within
+/// `k / CENTRED_SAMPLES` of the region's half-extent around its middle.
+const CENTRED_SAMPLES: usize = 10;
+
 /// Places the held object on `target` (see the [module docs](self)).
+///
+/// "Upright" is the orientation the object rested in before the grasp, turned about the
+/// vertical by a sampled yaw; the tip goes where the hold recorded after the lift puts the
+/// object so. Placements are sampled around the region's middle first and over the whole
+/// region after 10 samples: an object held by its edge (a bowl by its
+/// rim) can turn in the fingers while the arm moves, and lands with the most room around it.
 ///
 /// # Errors
 /// [`SkillError::NotHeld`] without a held object; [`SkillError::BadInput`] for a bad target or
@@ -284,10 +294,8 @@ pub fn place<R: Rng + ?Sized>(
         .held()
         .cloned()
         .ok_or_else(|| SkillError::NotHeld("placing needs a held object".into()))?;
-    let object_pose = world.base_pose(held.object)?;
-    let tip_now = arm.tip_pose(world)?;
-    // The object's shape relative to its root, and its extent below the root.
-    let shape_in_object = object_pose.inverse() * tip_now * held.shape_offset;
+    // The object's shape relative to its root.
+    let shape_in_object = held.shape_in_object();
     let support_bodies = match target.support {
         Some(m) => world.model_bodies(m)?,
         None => Vec::new(),
@@ -304,7 +312,7 @@ pub fn place<R: Rng + ?Sized>(
     let mut chosen = None;
     for i in 0..settings.samples {
         let yaw = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * object_pose.rotation;
+        let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * held.rest;
         let upright = Isometry3::from_parts(Translation3::identity(), rotation);
         let aabb = held.shape.compute_aabb(&to_pose(&(upright * shape_in_object)));
         let (lo, hi) = (aabb.mins, aabb.maxs);
@@ -314,8 +322,12 @@ pub fn place<R: Rng + ?Sized>(
             last = format!("`{}` does not fit on the placement region", held.name);
             continue;
         }
-        let x = rng.random_range(x0..=x1);
-        let y = rng.random_range(y0..=y1);
+        // The middle of the region first, then wider: the most room around the object for
+        // one that turned in the fingers on the way and lands off its planned footprint.
+        let spread = ((i + 1) as f64 / CENTRED_SAMPLES as f64).min(1.0);
+        let around = |lo: f64, hi: f64, u: f64| 0.5 * (lo + hi) + 0.5 * (hi - lo) * spread * u;
+        let x = around(x0, x1, rng.random_range(-1.0..=1.0));
+        let y = around(y0, y1, rng.random_range(-1.0..=1.0));
         let z = target.z + settings.clearance - lo.z as f64;
         let planned = Isometry3::from_parts(Translation3::new(x, y, z), rotation);
         if view.intersects(held.shape.as_ref(), &to_pose(&(planned * shape_in_object))) {

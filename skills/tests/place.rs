@@ -284,3 +284,61 @@ fn kinematic_placement_puts_the_mug_into_a_sink_basin() {
             && rest.y < basin.max[1] + 0.02
     );
 }
+
+#[test]
+fn an_object_that_turned_in_the_fingers_is_still_put_down_upright() {
+    let (mut world, robot, table, mug, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
+    grasp(
+        &mut world,
+        &mut arm,
+        mug,
+        &GraspSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    // The mug turns 25° in the fingers, about the axis the fingers close along (through the
+    // middle of the hold, so it stays between the pads).
+    let tip = arm.tip_pose(&world).unwrap();
+    let pinch = tip.rotation * nalgebra::Vector3::y_axis();
+    let centre = tip * nalgebra::Point3::new(arm.settings().tool_reach, 0.0, 0.0);
+    let turn = nalgebra::UnitQuaternion::from_axis_angle(&pinch, 25f64.to_radians());
+    let before = world.base_pose(mug).unwrap();
+    let turned = Isometry3::from_parts(
+        nalgebra::Translation3::from(centre.coords + turn * (before.translation.vector - centre.coords)),
+        turn * before.rotation,
+    );
+    world.place(mug, &turned).unwrap();
+    let tilted = (turned.rotation * nalgebra::Vector3::z()).z;
+    assert!(tilted < 0.95, "the mug did not turn: {tilted}");
+
+    let target = PlaceTarget {
+        min: [TABLE_X - 0.35, 0.15],
+        max: [TABLE_X - 0.15, 0.35],
+        ..PlaceTarget::on_top_of(&world, table).unwrap()
+    };
+    // Planned upright, as it stood before the grasp.
+    let dry = PlaceSettings {
+        dry_run: true,
+        ..Default::default()
+    };
+    let plan = place(&mut world, &mut arm, &target, &dry, Execution::Kinematic, &mut rng).unwrap();
+    let planned_up = (plan.planned.rotation * nalgebra::Vector3::z()).z;
+    assert!(planned_up > 0.999, "planned tilted: up.z = {planned_up}");
+
+    let r = place(
+        &mut world,
+        &mut arm,
+        &target,
+        &PlaceSettings::default(),
+        Execution::Kinematic,
+        &mut rng,
+    )
+    .unwrap();
+    let rest = world.base_pose(mug).unwrap();
+    let up = (rest.rotation * nalgebra::Vector3::z()).z;
+    assert!(up > 0.95, "the mug rests tilted: up.z = {up} ({r:?})");
+    assert!((rest.translation.z - top).abs() < 0.02, "the mug rests at {rest:?}");
+}
