@@ -123,8 +123,9 @@ fn bad_regions_are_typed_errors() {
     assert!(matches!(e, SkillError::BadInput(_)), "{e}");
 }
 
-#[test]
-fn kinematic_execution_places_the_mug_too() {
+/// The table scene with the mug grasped (kinematic execution), a strip of the table to the
+/// robot's left to put it on, and the random generator the grasp used.
+fn mug_held_kinematically() -> (World, Arm, PlaceTarget, ModelHandle, f64, rand_pcg::Pcg64Mcg) {
     let (mut world, robot, table, mug, top) = table_scene();
     let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
@@ -142,15 +143,23 @@ fn kinematic_execution_places_the_mug_too() {
         max: [TABLE_X - 0.15, 0.35],
         ..PlaceTarget::on_top_of(&world, table).unwrap()
     };
-    place(
-        &mut world,
-        &mut arm,
-        &target,
-        &PlaceSettings::default(),
-        Execution::Kinematic,
-        &mut rng,
-    )
-    .unwrap();
+    (world, arm, target, mug, top, rng)
+}
+
+/// Places the held object on `target` with default settings and kinematic execution.
+fn place_kinematically(
+    world: &mut World,
+    arm: &mut Arm,
+    target: &PlaceTarget,
+    rng: &mut rand_pcg::Pcg64Mcg,
+) -> hearth_skills::place::PlaceReport {
+    place(world, arm, target, &PlaceSettings::default(), Execution::Kinematic, rng).unwrap()
+}
+
+#[test]
+fn kinematic_execution_places_the_mug_too() {
+    let (mut world, mut arm, target, mug, top, mut rng) = mug_held_kinematically();
+    place_kinematically(&mut world, &mut arm, &target, &mut rng);
     let rest = world.base_pose(mug).unwrap().translation;
     assert!(
         rest.y > 0.12 && (rest.z - top).abs() < 0.02,
@@ -287,18 +296,7 @@ fn kinematic_placement_puts_the_mug_into_a_sink_basin() {
 
 #[test]
 fn an_object_that_turned_in_the_fingers_is_still_put_down_upright() {
-    let (mut world, robot, table, mug, top) = table_scene();
-    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
-    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
-    grasp(
-        &mut world,
-        &mut arm,
-        mug,
-        &GraspSettings::default(),
-        Execution::Kinematic,
-        &mut rng,
-    )
-    .unwrap();
+    let (mut world, mut arm, target, mug, top, mut rng) = mug_held_kinematically();
     // The mug turns 25° in the fingers, about the axis the fingers close along (through the
     // middle of the hold, so it stays between the pads).
     let tip = arm.tip_pose(&world).unwrap();
@@ -314,11 +312,6 @@ fn an_object_that_turned_in_the_fingers_is_still_put_down_upright() {
     let tilted = (turned.rotation * nalgebra::Vector3::z()).z;
     assert!(tilted < 0.95, "the mug did not turn: {tilted}");
 
-    let target = PlaceTarget {
-        min: [TABLE_X - 0.35, 0.15],
-        max: [TABLE_X - 0.15, 0.35],
-        ..PlaceTarget::on_top_of(&world, table).unwrap()
-    };
     // Planned upright, as it stood before the grasp.
     let dry = PlaceSettings {
         dry_run: true,
@@ -328,15 +321,7 @@ fn an_object_that_turned_in_the_fingers_is_still_put_down_upright() {
     let planned_up = (plan.planned.rotation * nalgebra::Vector3::z()).z;
     assert!(planned_up > 0.999, "planned tilted: up.z = {planned_up}");
 
-    let r = place(
-        &mut world,
-        &mut arm,
-        &target,
-        &PlaceSettings::default(),
-        Execution::Kinematic,
-        &mut rng,
-    )
-    .unwrap();
+    let r = place_kinematically(&mut world, &mut arm, &target, &mut rng);
     let rest = world.base_pose(mug).unwrap();
     let up = (rest.rotation * nalgebra::Vector3::z()).z;
     assert!(up > 0.95, "the mug rests tilted: up.z = {up} ({r:?})");
