@@ -125,30 +125,22 @@ impl FkProgram {
     /// Runs every op: `poses[0]` must hold the root pose.
     #[inline]
     pub(crate) fn run(&self, q: &[f64], poses: &mut [Isometry3<f64>]) {
-        // Serial chains dominate: keep the last pose in registers instead of reloading it.
-        let mut prev_child = 0u32;
-        let mut prev = poses[0];
-        for op in &self.ops {
-            let parent = if op.parent == prev_child {
-                prev
-            } else {
-                poses[op.parent as usize]
-            };
-            let pose = parent * op.local(q);
-            poses[op.child as usize] = pose;
-            prev = pose;
-            prev_child = op.child;
-        }
+        Self::eval(self.ops.iter(), q, poses);
     }
 
     /// Runs only the ops listed (each op's parent must already be computed).
     #[inline]
     pub(crate) fn run_subset(&self, subset: &[u32], q: &[f64], poses: &mut [Isometry3<f64>]) {
-        // As in `run`: along a serial stretch the parent is the pose just computed.
-        let mut prev_child = u32::MAX;
-        let mut prev = Isometry3::identity();
-        for &i in subset {
-            let op = &self.ops[i as usize];
+        Self::eval(subset.iter().map(|&i| &self.ops[i as usize]), q, poses);
+    }
+
+    /// Evaluates `ops` in order. Serial chains dominate: the last pose stays in registers
+    /// instead of being reloaded when the next op hangs from it.
+    #[inline(always)]
+    fn eval<'a>(ops: impl Iterator<Item = &'a FkOp>, q: &[f64], poses: &mut [Isometry3<f64>]) {
+        let mut prev_child = 0u32;
+        let mut prev = poses[0];
+        for op in ops {
             let parent = if op.parent == prev_child {
                 prev
             } else {

@@ -207,17 +207,33 @@ fn repair_replaces_edges_that_fail_finely() {
     assert!(fixed.states.iter().any(|q| q[1] >= 0.9));
 }
 
-/// A band 0.2 mm thick across the left of the square: sampled checks at millimetre spacing
-/// mostly miss it, a check at 0.1 mm spacing cannot (consecutive samples are closer than it
-/// is thick).
+/// A band 0.2 mm thick across the square at y = 0.5, left of `x_max`: sampled checks at
+/// millimetre spacing mostly miss it, a check at 0.1 mm spacing cannot (consecutive samples
+/// are closer than it is thick).
 struct Band {
+    x_max: f64,
     checks: u64,
+}
+
+impl Band {
+    /// Across the left quarter: paths can go around it on the right.
+    fn left() -> Self {
+        Self { x_max: 0.25, checks: 0 }
+    }
+
+    /// Across the whole square: every path from bottom to top crosses it.
+    fn wall() -> Self {
+        Self {
+            x_max: f64::INFINITY,
+            checks: 0,
+        }
+    }
 }
 
 impl StateValidator for Band {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
-        !((0.5..=0.5002).contains(&q[1]) && q[0] < 0.25)
+        !((0.5..=0.5002).contains(&q[1]) && q[0] < self.x_max)
     }
     fn checks(&self) -> u64 {
         self.checks
@@ -247,7 +263,7 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
             smooth(
                 Smoothing::Parabolic,
                 &mut motion,
-                &mut Band { checks: 0 },
+                &mut Band::left(),
                 &zigzag,
                 &limits,
                 settings,
@@ -258,7 +274,7 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
         };
         let plain = run(&settings);
         assert!(!plain.fell_back, "no verification asked for");
-        if plain.trajectory.check(&space, &mut Band { checks: 0 }, verify).is_err() {
+        if plain.trajectory.check(&space, &mut Band::left(), verify).is_err() {
             unverified_fails += 1;
         }
         let verified = run(&ShortcutSettings {
@@ -268,7 +284,7 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
         assert!(
             verified
                 .trajectory
-                .check(&space, &mut Band { checks: 0 }, verify)
+                .check(&space, &mut Band::left(), verify)
                 .is_ok(),
             "seed {seed}: the returned motion fails the verification check"
         );
@@ -282,21 +298,6 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
         "the band never slipped through: the test shows nothing"
     );
     assert_eq!(fell_back, unverified_fails);
-}
-
-/// A band 0.2 mm thick across the whole square: every path from bottom to top crosses it.
-struct Wall {
-    checks: u64,
-}
-
-impl StateValidator for Wall {
-    fn is_valid(&mut self, q: &[f64]) -> bool {
-        self.checks += 1;
-        !(0.5..=0.5002).contains(&q[1])
-    }
-    fn checks(&self) -> u64 {
-        self.checks
-    }
 }
 
 #[test]
@@ -319,7 +320,7 @@ fn smoothing_reports_a_motion_that_no_fallback_can_verify() {
         let out = smooth(
             smoothing,
             &mut motion,
-            &mut Wall { checks: 0 },
+            &mut Band::wall(),
             &zigzag,
             &limits2(),
             &settings,
