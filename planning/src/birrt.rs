@@ -11,8 +11,11 @@ use crate::validity::StateValidator;
 
 /// RRT-Connect: a tree from the start and a tree from the goals (seeded with every valid goal),
 /// grown in turns. Each iteration extends one tree a step of at most `range` towards a random
-/// sample, then greedily connects the other tree to the new state (repeated steps until it
-/// reaches it or is blocked); the trees swap roles every iteration.
+/// sample, then greedily connects the other tree to the new state (equal steps of at most
+/// `range` until it reaches it or is blocked). Tree balancing ([`BiRrt::balance`], as in
+/// VAMP's RRT-Connect) is on by default; dynamic-domain sampling ([`DynamicDomain`]) is
+/// available but off, because it lowered success on the MotionBenchMaker problems
+/// (`docs/benchmarks.md`). [`BiRrt::plain`] is the textbook algorithm.
 ///
 /// One iteration is one sample. Settings are serde-derivable.
 ///
@@ -40,7 +43,7 @@ use crate::validity::StateValidator;
 /// assert!(solution.path.states.iter().any(|q| q[1] > 0.8));
 /// # Ok::<(), hearth_planning::space::SpaceError>(())
 /// ```
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct BiRrt {
     /// Longest step; `None` is a tenth of [`default_range`](crate::planner::default_range)
@@ -48,55 +51,189 @@ pub struct BiRrt {
     /// 0.2 × the extent, made each extension check up to ~120 states on MotionBenchMaker
     /// problems; the short step was 3–8× faster there with higher success (`docs/benchmarks.md`).
     pub range: Option<f64>,
+    /// Dynamic-domain sampling (Yershova, Jaillet, Siméon & LaValle, ICRA 2005): a state whose
+    /// extension failed only accepts samples within its domain radius afterwards, so states
+    /// wedged against obstacles stop spending collision checks on far samples. `None` turns it
+    /// off (the default).
+    pub dynamic_domain: Option<DynamicDomain>,
+    /// Grow the smaller tree while it has less than half the other's states, instead of
+    /// strictly alternating (a tree stuck in a pocket gets the samples it needs to get out).
+    pub balance: bool,
+}
+
+impl Default for BiRrt {
+    fn default() -> Self {
+        Self {
+            range: None,
+            dynamic_domain: None,
+            balance: true,
+        }
+    }
+}
+
+impl BiRrt {
+    /// Plain RRT-Connect with step `range`: no dynamic domain, strictly alternating trees.
+    ///
+    /// ```
+    /// let plain = hearth_planning::BiRrt::plain(Some(0.3));
+    /// assert!(plain.dynamic_domain.is_none() && !plain.balance);
+    /// ```
+    pub fn plain(range: Option<f64>) -> Self {
+        Self {
+            range,
+            dynamic_domain: None,
+            balance: false,
+        }
+    }
+
+    /// Default settings with step `range`.
+    ///
+    /// ```
+    /// let b = hearth_planning::BiRrt::with_range(Some(1.2));
+    /// assert_eq!(b.range, Some(1.2));
+    /// assert!(b.balance && b.dynamic_domain.is_none());
+    /// ```
+    pub fn with_range(range: Option<f64>) -> Self {
+        Self {
+            range,
+            ..Self::default()
+        }
+    }
+}
+
+/// Settings of dynamic-domain sampling, in multiples of the planner's step (`range`).
+///
+/// ```
+/// let dd = hearth_planning::birrt::DynamicDomain::default();
+/// assert!(dd.min_radius <= dd.radius && dd.alpha > 0.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DynamicDomain {
+    /// Domain radius given to a state at its first failed extension.
+    pub radius: f64,
+    /// The radius never shrinks below this.
+    pub min_radius: f64,
+    /// Each further failure shrinks the radius by this fraction; each success grows it by it.
+    pub alpha: f64,
+}
+
+impl Default for DynamicDomain {
+    /// Twice the step, at least half the step, 10⁻⁴ per outcome: the ratios VAMP's RRT-Connect
+    /// uses (radius 4, minimum 1, step 2).
+    fn default() -> Self {
+        Self {
+            radius: 2.0,
+            min_radius: 0.5,
+            alpha: 1e-4,
+        }
+    }
 }
 
 /// [`BiRrt`]'s default step as a fraction of [`default_range`](crate::planner::default_range).
 const BIRRT_RANGE_SCALE: f64 = 0.1;
 
-/// Result of one extension step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Extend {
-    /// Blocked: nothing added.
-    Trapped,
-    /// A state a step short of the target was added.
-    Advanced(usize),
-    /// The target itself was added.
-    Reached(usize),
+/// One tree of the search with each state's dynamic-domain radius.
+struct Grown {
+    tree: Tree,
+    radius: Vec<f64>,
+}
+
+impl Grown {
+    fn new(dim: usize) -> Self {
+        Self {
+            tree: Tree::new(dim),
+            radius: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, q: &[f64], parent: Option<usize>) -> usize {
+        self.radius.push(f64::INFINITY);
+        self.tree.add(q, parent)
+    }
+
+    fn len(&self) -> usize {
+        self.tree.len()
+    }
 }
 
 /// Scratch buffers and settings shared by the extension steps.
 struct Stepper {
     range: f64,
+    /// Dynamic domain in absolute units: (radius, min radius, alpha).
+    domain: Option<(f64, f64, f64)>,
     step: Vec<f64>,
+    from: Vec<f64>,
 }
 
 impl Stepper {
-    /// Extends `tree` one step towards `target`.
+    /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
+    /// `None` when the sample was outside the nearest state's domain or the step was blocked.
     fn extend<S: Space, V: StateValidator + ?Sized>(
         &mut self,
         motion: &mut MotionValidator<S>,
         validator: &mut V,
-        tree: &mut Tree,
+        grown: &mut Grown,
         target: &[f64],
-    ) -> Extend {
+    ) -> Option<usize> {
         let space = motion.space();
-        let near = tree.nn.nearest(space, target).expect("trees are never empty");
-        let d = space.distance(tree.state(near), target);
-        let reached = d <= self.range;
-        if reached {
+        let near = grown.tree.nn.nearest(space, target).expect("trees are never empty");
+        let d = space.distance(grown.tree.state(near), target);
+        if self.domain.is_some() && d > grown.radius[near] {
+            return None;
+        }
+        if d <= self.range {
             self.step.copy_from_slice(target);
         } else {
-            space.interpolate(tree.state(near), target, self.range / d, &mut self.step);
+            space.interpolate(grown.tree.state(near), target, self.range / d, &mut self.step);
         }
-        if !validator.is_valid(&self.step) || !motion.check_motion(validator, tree.state(near), &self.step) {
-            return Extend::Trapped;
+        let ok = validator.is_valid(&self.step) && motion.check_motion(validator, grown.tree.state(near), &self.step);
+        if let Some((radius, min_radius, alpha)) = self.domain {
+            let r = &mut grown.radius[near];
+            if ok {
+                if r.is_finite() {
+                    *r *= 1.0 + alpha;
+                }
+            } else if r.is_finite() {
+                *r = (*r * (1.0 - alpha)).max(min_radius);
+            } else {
+                *r = radius;
+            }
         }
-        let i = tree.add(&self.step, Some(near));
-        if reached {
-            Extend::Reached(i)
-        } else {
-            Extend::Advanced(i)
+        ok.then(|| grown.add(&self.step, Some(near)))
+    }
+
+    /// Grows `grown` from its state nearest to `target` straight towards it, in equal steps of
+    /// at most `range`, each added to the tree. Returns the index of `target` once reached.
+    fn connect<S: Space, V: StateValidator + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        grown: &mut Grown,
+        target: &[f64],
+    ) -> Option<usize> {
+        let mut at = grown
+            .tree
+            .nn
+            .nearest(motion.space(), target)
+            .expect("trees are never empty");
+        let d = motion.space().distance(grown.tree.state(at), target);
+        let n = ((d / self.range).ceil() as usize).max(1);
+        self.from.copy_from_slice(grown.tree.state(at));
+        for k in 1..=n {
+            if k == n {
+                self.step.copy_from_slice(target);
+            } else {
+                motion
+                    .space()
+                    .interpolate(&self.from, target, k as f64 / n as f64, &mut self.step);
+            }
+            if !validator.is_valid(&self.step) || !motion.check_motion(validator, grown.tree.state(at), &self.step) {
+                return None;
+            }
+            at = grown.add(&self.step, Some(at));
         }
+        Some(at)
     }
 }
 
@@ -112,70 +249,70 @@ impl<S: Space> Planner<S> for BiRrt {
         let mut run = Run::start(budget, motion, validator);
         let space = motion.space();
         let range = resolve_range(space, self.range, BIRRT_RANGE_SCALE)?;
+        let domain = match self.dynamic_domain {
+            None => None,
+            Some(dd) => {
+                let ok = |v: f64| v.is_finite() && v > 0.0;
+                if !ok(dd.radius) || !ok(dd.min_radius) || !(0.0..1.0).contains(&dd.alpha) {
+                    return Err(PlanError::BadInput(format!(
+                        "dynamic domain {dd:?}: radii must be positive and finite, alpha in [0, 1)"
+                    )));
+                }
+                Some((dd.radius * range, dd.min_radius.min(dd.radius) * range, dd.alpha))
+            }
+        };
         let goals = valid_goals(space, validator, request, budget)?;
         let dim = space.dim();
-        let mut start_tree = Tree::new(dim);
-        start_tree.add(&request.start, None);
-        let mut goal_tree = Tree::new(dim);
+        // trees[0] grows from the start, trees[1] from the goals.
+        let mut trees = [Grown::new(dim), Grown::new(dim)];
+        trees[0].add(&request.start, None);
         for g in &goals {
-            goal_tree.add(g, None);
+            trees[1].add(g, None);
         }
         let mut stepper = Stepper {
             range,
+            domain,
             step: vec![0.0; dim],
+            from: vec![0.0; dim],
         };
-        // `target` is first the state to connect to (the start, then each new state), then
-        // the next sample.
         let mut target = request.start.clone();
-        // Which tree grew last; the other one is connected to `target`.
-        let mut from_start = true;
         // Try connecting the goal tree straight to the start first.
-        let mut connect = true;
-        loop {
-            if connect {
-                connect = false;
-                let other = if from_start { &mut goal_tree } else { &mut start_tree };
-                let reached = loop {
-                    match stepper.extend(motion, validator, other, &target) {
-                        Extend::Advanced(_) => {}
-                        Extend::Reached(i) => break Some(i),
-                        Extend::Trapped => break None,
-                    }
-                };
-                if let Some(i) = reached {
-                    // `target` is now the newest state of both trees; join the branches at it.
-                    let (si, gi) = if from_start {
-                        (start_tree.len() - 1, i)
-                    } else {
-                        (i, goal_tree.len() - 1)
-                    };
-                    let mut states = start_tree.branch(si);
-                    let mut back = goal_tree.branch(gi);
-                    back.reverse();
-                    states.extend(back.into_iter().skip(1));
-                    let stats = run.stats(motion, validator, vec![start_tree.len(), goal_tree.len()]);
-                    return Ok(Solution {
-                        path: Path { states },
-                        stats,
-                    });
-                }
-                from_start = !from_start;
-            }
+        let joined = stepper
+            .connect(motion, validator, &mut trees[1], &target)
+            .map(|gi| (0, gi));
+        let mut grow = 0usize;
+        let mut joined = joined;
+        while joined.is_none() {
             if !run.next() {
-                break;
+                return Err(PlanError::Timeout {
+                    stats: run.stats(motion, validator, vec![trees[0].len(), trees[1].len()]),
+                });
+            }
+            // Alternate, unless balancing keeps the smaller tree growing.
+            let (a, b) = (trees[grow].len(), trees[1 - grow].len());
+            if !(self.balance && 2 * a <= b) {
+                grow = 1 - grow;
             }
             motion.space().sample(rng, &mut target);
-            let tree = if from_start { &mut start_tree } else { &mut goal_tree };
-            match stepper.extend(motion, validator, tree, &target) {
-                Extend::Trapped => from_start = !from_start,
-                Extend::Advanced(i) | Extend::Reached(i) => {
-                    target.copy_from_slice(tree.state(i));
-                    connect = true;
-                }
+            let [t0, t1] = &mut trees;
+            let (this, other) = if grow == 0 { (t0, t1) } else { (t1, t0) };
+            let Some(i) = stepper.extend(motion, validator, this, &target) else {
+                continue;
+            };
+            target.copy_from_slice(this.tree.state(i));
+            if let Some(j) = stepper.connect(motion, validator, other, &target) {
+                joined = Some(if grow == 0 { (i, j) } else { (j, i) });
             }
         }
-        Err(PlanError::Timeout {
-            stats: run.stats(motion, validator, vec![start_tree.len(), goal_tree.len()]),
+        let (si, gi) = joined.expect("loop ends when joined");
+        let mut states = trees[0].tree.branch(si);
+        let mut back = trees[1].tree.branch(gi);
+        back.reverse();
+        states.extend(back.into_iter().skip(1));
+        let stats = run.stats(motion, validator, vec![trees[0].len(), trees[1].len()]);
+        Ok(Solution {
+            path: Path { states },
+            stats,
         })
     }
 }

@@ -11,7 +11,8 @@ use hearth_planning::problem::ProblemSet;
 use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
-    BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest, Planner, Rrt, Solution,
+    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest, Planner,
+    Rrt, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -222,6 +223,21 @@ fn narrow_passage_rrt() {
 #[test]
 fn narrow_passage_birrt() {
     passage("passage/birrt", BiRrt::default);
+}
+
+/// Textbook RRT-Connect: strictly alternating trees, no dynamic domain.
+#[test]
+fn narrow_passage_birrt_plain() {
+    passage("passage/birrt_plain", || BiRrt::plain(None));
+}
+
+/// Dynamic-domain sampling: states wedged against the wall only accept near samples.
+#[test]
+fn narrow_passage_birrt_dynamic_domain() {
+    passage("passage/birrt_dd", || BiRrt {
+        dynamic_domain: Some(DynamicDomain::default()),
+        ..BiRrt::default()
+    });
 }
 
 #[test]
@@ -485,8 +501,40 @@ fn bad_input_is_named() {
         ..Default::default()
     };
     assert!(bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
-    let birrt = BiRrt { range: Some(f64::NAN) };
+    let birrt = BiRrt::with_range(Some(f64::NAN));
     assert!(bad(birrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    for dd in [
+        DynamicDomain {
+            radius: 0.0,
+            ..Default::default()
+        },
+        DynamicDomain {
+            min_radius: f64::NAN,
+            ..Default::default()
+        },
+        DynamicDomain {
+            radius: f64::INFINITY,
+            ..Default::default()
+        },
+        DynamicDomain {
+            alpha: 1.0,
+            ..Default::default()
+        },
+        DynamicDomain {
+            alpha: -0.1,
+            ..Default::default()
+        },
+    ] {
+        let mut birrt = BiRrt {
+            dynamic_domain: Some(dd),
+            ..BiRrt::default()
+        };
+        let e = birrt.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::BadInput(m) if m.contains("dynamic domain")),
+            "{dd:?}: {e}"
+        );
+    }
     let mut prm = LazyPrm::new(LazyPrmSettings {
         k: 0,
         ..Default::default()

@@ -282,10 +282,7 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
             ..settings.clone()
         });
         assert!(
-            verified
-                .trajectory
-                .check(&space, &mut Band::left(), verify)
-                .is_ok(),
+            verified.trajectory.check(&space, &mut Band::left(), verify).is_ok(),
             "seed {seed}: the returned motion fails the verification check"
         );
         if verified.fell_back {

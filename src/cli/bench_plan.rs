@@ -14,8 +14,8 @@ use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
-    BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity, Rrt,
-    StateValidator,
+    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity,
+    Rrt, StateValidator,
 };
 use rand::SeedableRng;
 use serde_json::{Value, json};
@@ -60,9 +60,14 @@ pub struct BenchPlanArgs {
     /// re-validated at a tenth of it.
     #[arg(long, default_value_t = 0.02)]
     resolution: f64,
-    /// Longest planner step (rad); default 0.2 × the space's extent, as in OMPL.
+    /// Longest planner step (rad); each planner's default when absent (BiRRT: 0.02 × the
+    /// space's extent, ≈ 0.26 rad for the Panda and the Fetch; RRT and LazyPRM: 0.2 ×, as OMPL).
     #[arg(long)]
     range: Option<f64>,
+    /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
+    /// minimum radius is a quarter of it). Off by default: see `docs/benchmarks.md`.
+    #[arg(long)]
+    dynamic_domain: Option<f64>,
     /// Path post-processing.
     #[arg(long, value_enum, default_value_t = ShortcutKind::Parabolic)]
     shortcut: ShortcutKind,
@@ -177,6 +182,12 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
         bail!("--range must be positive");
     }
+    if a.dynamic_domain.is_some_and(|r| !r.is_finite() || r <= 0.0) {
+        bail!("--dynamic-domain must be positive and finite");
+    }
+    if a.dynamic_domain.is_some() && a.planner != PlannerKind::Birrt {
+        bail!("--dynamic-domain applies to --planner birrt only");
+    }
     let mut sets: Vec<(ProblemSet, Option<PathBuf>)> = Vec::new();
     for p in &a.problems {
         if p.is_dir() {
@@ -252,7 +263,17 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     }
                     .plan(&mut motion, &mut v, &request, &budget, &mut rng),
                     PlannerKind::Birrt => {
-                        BiRrt { range: a.range }.plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                        let dynamic_domain = a.dynamic_domain.map(|radius| DynamicDomain {
+                            radius,
+                            min_radius: radius / 4.0,
+                            ..DynamicDomain::default()
+                        });
+                        BiRrt {
+                            range: a.range,
+                            dynamic_domain,
+                            balance: true,
+                        }
+                        .plan(&mut motion, &mut v, &request, &budget, &mut rng)
                     }
                     PlannerKind::Lazyprm => LazyPrm::new(LazyPrmSettings {
                         range: a.range,

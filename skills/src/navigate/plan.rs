@@ -249,7 +249,7 @@ pub(crate) fn plan_path<R: Rng + ?Sized>(
         let mut local_motion = MotionValidator::new(local, settings.check_resolution);
         let request = PlanRequest::new(states[i].clone(), Goal::Config(states[j].clone()));
         let budget = Budget::iterations(settings.plan_iterations).with_time(settings.plan_time);
-        let mut planner = BiRrt { range: Some(0.2) };
+        let mut planner = BiRrt::with_range(Some(0.2));
         let local_shortcut = ShortcutSettings {
             attempts: settings.shortcut_attempts,
             time_limit: None,
