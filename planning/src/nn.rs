@@ -17,6 +17,8 @@ use crate::space::Space;
 const BUFFER: usize = 32;
 /// Most states in a tree leaf.
 const LEAF: usize = 8;
+/// Entries of a search's stack: more than the height + 1 of any tree over u32 ids.
+const STACK: usize = 64;
 /// Slack on the triangle-inequality pruning bounds, so rounding never prunes the exact answer.
 const SLACK: f64 = 1e-9;
 
@@ -357,11 +359,16 @@ impl VpTree {
         q: &[f64],
         c: &mut C,
     ) {
-        // Nodes to visit with a lower bound on the distance from `q` to any of their states.
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(32);
-        stack.push((0, 0.0));
+        // Nodes to visit with a lower bound on the distance from `q` to any of their states,
+        // on the stack frame: each visited inner node replaces itself with its two children, so
+        // the stack never holds more than the tree's height + 1 entries, and each child has at
+        // most half its parent's states, so the height is at most 33 for u32 ids.
+        let mut stack = [(0u32, 0.0f64); STACK];
+        let mut top = 1usize;
         let state = |i: u32| &states[i as usize * dim..(i as usize + 1) * dim];
-        while let Some((n, bound)) = stack.pop() {
+        while top > 0 {
+            top -= 1;
+            let (n, bound) = stack[top];
             if bound > c.radius() + SLACK {
                 continue;
             }
@@ -386,13 +393,14 @@ impl VpTree {
                     // Inside states p have d(p, vp) ≤ mu, so d(q, p) ≥ d - mu; outside ones have
                     // d(p, vp) ≥ mu, so d(q, p) ≥ mu - d. The nearer side is pushed last.
                     let (b_in, b_out) = ((d - mu).max(0.0), (mu - d).max(0.0));
-                    if d <= mu {
-                        stack.push((outside, b_out));
-                        stack.push((inside, b_in));
+                    let (far, near) = if d <= mu {
+                        ((outside, b_out), (inside, b_in))
                     } else {
-                        stack.push((inside, b_in));
-                        stack.push((outside, b_out));
-                    }
+                        ((inside, b_in), (outside, b_out))
+                    };
+                    stack[top] = far;
+                    stack[top + 1] = near;
+                    top += 2;
                 }
             }
         }
