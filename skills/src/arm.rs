@@ -902,12 +902,20 @@ impl Arm {
             }
             Execution::Physics => {
                 let support = self.support_bodies(world)?;
+                // What the arm already presses on (a pull can leave the elbow against a wall,
+                // and the plan then starts by backing off) is no collision of this motion:
+                // allowed until the arm has left it, unless it pushes much harder.
+                let mut pressed = self.pressing(world, &support)?;
                 for k in 1..=motion_steps + self.settings.settle_steps {
                     plan.trajectory.sample((k as f64 * dt).min(duration), &mut q, None);
                     self.unwrap_to(&mut q, &turns);
                     self.command(world, &q)?;
                     world.step();
-                    if let Some(hit) = self.unexpected_contact(world, &support, &[])? {
+                    if !pressed.is_empty() {
+                        let still = self.pressing(world, &support)?;
+                        pressed.retain(|(b, _)| still.iter().any(|(s, _)| s == b));
+                    }
+                    if let Some(hit) = self.unexpected_contact(world, &support, &pressed)? {
                         self.hold_here(world)?;
                         return Err(SkillError::Collision(format!("{hit} at t = {:.2} s", world.time())));
                     }
@@ -1082,16 +1090,26 @@ impl Arm {
     }
 
     /// The first contact that pushes harder than `contact_force` on a link, other than the
-    /// support links on what they stand on, the held object, and `allowed` bodies.
-    fn unexpected_contact(&self, world: &World, support: &[BodyId], allowed: &[BodyId]) -> SkillResult<Option<String>> {
+    /// support links on what they stand on and the held object; a body in `allowed` may push
+    /// up to the force given with it.
+    fn unexpected_contact(
+        &self,
+        world: &World,
+        support: &[BodyId],
+        allowed: &[(BodyId, f64)],
+    ) -> SkillResult<Option<String>> {
         let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
         let mut hit = None;
         world.for_each_contact(self.robot, |c| {
             let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
-            if hit.is_some() || on_support || held.contains(&c.other) || allowed.contains(&c.other) {
+            if hit.is_some() || on_support || held.contains(&c.other) {
                 return;
             }
-            if c.force.norm() > self.settings.contact_force {
+            let limit = allowed
+                .iter()
+                .find(|(b, _)| *b == c.other)
+                .map_or(self.settings.contact_force, |&(_, f)| f);
+            if c.force.norm() > limit {
                 hit = Some(format!(
                     "link `{}` touched `{}` ({:.1} N)",
                     c.link,
@@ -1101,6 +1119,27 @@ impl Arm {
             }
         })?;
         Ok(hit)
+    }
+
+    /// Bodies pushing on the robot harder than `contact_force` now (support contacts and the
+    /// held object excluded), each with the force it may reach before it counts as a
+    /// collision: twice its largest contact force now plus `contact_force`.
+    fn pressing(&self, world: &World, support: &[BodyId]) -> SkillResult<Vec<(BodyId, f64)>> {
+        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
+        let mut out: Vec<(BodyId, f64)> = Vec::new();
+        world.for_each_contact(self.robot, |c| {
+            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+            let f = c.force.norm();
+            if on_support || held.contains(&c.other) || f <= self.settings.contact_force {
+                return;
+            }
+            let limit = 2.0 * f + self.settings.contact_force;
+            match out.iter_mut().find(|(b, _)| *b == c.other) {
+                Some((_, l)) => *l = l.max(limit),
+                None => out.push((c.other, limit)),
+            }
+        })?;
+        Ok(out)
     }
 
     /// The sum of contact forces on the arm's links (support contacts excluded), N.

@@ -4,7 +4,7 @@
 use hearth_sim::assets::{Asset, Category};
 use hearth_sim::kinematics::RobotModel;
 use hearth_sim::scene::{SceneFile, SceneObject};
-use hearth_sim::world::{ModelHandle, SpawnOptions, World, WorldConfig};
+use hearth_sim::world::{JointCommand, ModelHandle, SpawnOptions, World, WorldConfig};
 use hearth_skills::arm::{Arm, ArmSettings, ArmTarget, LinearMove};
 use hearth_skills::planning::StateValidator;
 use hearth_skills::{Execution, SkillError};
@@ -151,6 +151,49 @@ fn an_arm_pressed_onto_the_table_backs_off_and_plans_from_there() {
     for (a, b) in first.iter().zip(&start) {
         assert!((a - b).abs() < 1e-9, "the plan starts where the arm is");
     }
+    let r = arm.execute(&mut world, &plan, Execution::Physics).unwrap();
+    assert!(r.executed);
+    let tip = arm.tip_pose(&world).unwrap().translation.vector;
+    assert!((tip - above.translation.vector).norm() < 0.03, "{tip:?}");
+}
+
+/// A pull can leave a link pressed against furniture; the next motion starts there and backs
+/// off: what the arm already presses on at the start is not a collision of that motion.
+#[test]
+fn a_motion_may_start_pressed_against_what_it_leaves() {
+    let (mut world, robot, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
+    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + 0.2), down);
+    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
+        .unwrap();
+    // Teleported 5 mm deeper than the table top and held there: the fingers press on it.
+    let mut into = LinearMove::new(-Vector3::z(), 0.3);
+    into.check_world = false;
+    let (path, _) = arm.linear_path(&world, &into).unwrap();
+    let (mut full, _) = arm.configuration(&world).unwrap();
+    let z0 = arm.tip_pose(&world).unwrap().translation.z;
+    for q in &path {
+        arm.chain().scatter(q, &mut full);
+        world.reset_configuration(robot, &full).unwrap();
+        if arm.tip_pose(&world).unwrap().translation.z < z0 - 0.205 {
+            break;
+        }
+    }
+    let names = world.model(robot).unwrap().variable_names().to_vec();
+    for &i in arm.chain().variables() {
+        let hold = JointCommand::Position { target: full[i] };
+        world.set_joint_command(robot, &names[i], hold).unwrap();
+    }
+    world.step();
+    let pressing = world
+        .contacts(robot)
+        .unwrap()
+        .into_iter()
+        .filter(|c| c.other_name.starts_with("table") && c.force.norm() > arm.settings().contact_force)
+        .count();
+    assert!(pressing > 0, "the fingers press on the table");
+    let plan = arm.plan(&world, &ArmTarget::Pose(above), &[], &mut rng(3)).unwrap();
     let r = arm.execute(&mut world, &plan, Execution::Physics).unwrap();
     assert!(r.executed);
     let tip = arm.tip_pose(&world).unwrap().translation.vector;
