@@ -36,6 +36,18 @@ fn rng(seed: u64) -> rand_pcg::Pcg64Mcg {
     rand_pcg::Pcg64Mcg::seed_from_u64(seed)
 }
 
+/// The table scene with the Fetch's gripper pointing down `height` above the table top (moved
+/// there in physics); returns that pose too.
+fn gripper_above_table(height: f64) -> (World, ModelHandle, Arm, Isometry3<f64>) {
+    let (mut world, robot, top) = table_scene();
+    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
+    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
+    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + height), down);
+    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
+        .unwrap();
+    (world, robot, arm, above)
+}
+
 #[test]
 fn planned_motion_reaches_its_goal_in_physics_and_kinematically() {
     let (mut world, robot, top) = table_scene();
@@ -95,13 +107,8 @@ fn unreachable_and_malformed_goals_are_typed_errors() {
 
 #[test]
 fn straight_line_moves_follow_the_line_and_stop_at_the_table() {
-    let (mut world, robot, top) = table_scene();
-    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
-    // Gripper pointing down over the table.
-    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
-    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + 0.25), down);
-    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
-        .unwrap();
+    let (mut world, _, mut arm, above) = gripper_above_table(0.25);
+    let top = above.translation.z - 0.25;
     // 10 cm sideways, in free space.
     let side = LinearMove::new(Vector3::y(), 0.1);
     let r = arm.move_linear(&mut world, &side, Execution::Physics).unwrap();
@@ -126,12 +133,7 @@ fn straight_line_moves_follow_the_line_and_stop_at_the_table() {
 
 #[test]
 fn an_arm_pressed_onto_the_table_backs_off_and_plans_from_there() {
-    let (mut world, robot, top) = table_scene();
-    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
-    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
-    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + 0.2), down);
-    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
-        .unwrap();
+    let (mut world, _, mut arm, above) = gripper_above_table(0.2);
     let mut press = LinearMove::new(-Vector3::z(), 0.4);
     press.check_world = false;
     press.force_limit = 40.0;
@@ -161,12 +163,7 @@ fn an_arm_pressed_onto_the_table_backs_off_and_plans_from_there() {
 /// off: what the arm already presses on at the start is not a collision of that motion.
 #[test]
 fn a_motion_may_start_pressed_against_what_it_leaves() {
-    let (mut world, robot, top) = table_scene();
-    let mut arm = Arm::new(&world, robot, ArmSettings::fetch()).unwrap();
-    let down = nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
-    let above = Isometry3::from_parts(nalgebra::Translation3::new(TABLE_X - 0.3, 0.0, top + 0.2), down);
-    arm.move_to(&mut world, &ArmTarget::Pose(above), Execution::Physics, &mut rng(2))
-        .unwrap();
+    let (mut world, robot, mut arm, above) = gripper_above_table(0.2);
     // Teleported 5 mm deeper than the table top and held there: the fingers press on it.
     let mut into = LinearMove::new(-Vector3::z(), 0.3);
     into.check_world = false;
