@@ -140,7 +140,8 @@ pub struct Held {
     pub shape: SharedShape,
     /// The shape's pose in the tip frame.
     pub shape_offset: Isometry3<f64>,
-    /// The object's orientation where it rested before the grasp: "upright" for placing it.
+    /// The object's orientation where it rests, taken once the fingers have closed on it and
+    /// before the lift (the squeeze may tip it by a few degrees): "upright" for placing it.
     pub rest: UnitQuaternion<f64>,
 }
 
