@@ -459,6 +459,21 @@ fn bench_plan_writes_results_json() {
             "{selector}: {err}"
         );
     }
+    for (extra, says) in [
+        (&["--dynamic-domain", "0"][..], "--dynamic-domain must be positive"),
+        (&["--dynamic-domain", "2", "--planner", "rrt"][..], "birrt only"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+            .args(["bench", "plan", "--problems", data])
+            .args(extra)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(says) && !err.contains("panicked"),
+            "{extra:?}: {err}"
+        );
+    }
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
         .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])
         .output()
