@@ -277,11 +277,10 @@ impl<S: Space> Planner<S> for BiRrt {
         };
         let mut target = request.start.clone();
         // Try connecting the goal tree straight to the start first.
-        let joined = stepper
+        let mut joined = stepper
             .connect(motion, validator, &mut trees[1], &target)
             .map(|gi| (0, gi));
         let mut grow = 0usize;
-        let mut joined = joined;
         while joined.is_none() {
             if !run.next() {
                 return Err(PlanError::Timeout {

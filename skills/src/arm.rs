@@ -26,7 +26,7 @@ use hearth_planning::validity::Attached;
 use hearth_planning::{
     BiRrt, Budget, Goal, MotionValidator, Path, PlanError, PlanRequest, Planner, RobotValidity, StateValidator,
 };
-use hearth_sim::world::{BodyId, JointCommand, ModelHandle, World};
+use hearth_sim::world::{BodyId, ContactRef, JointCommand, ModelHandle, World};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt};
 
@@ -1099,11 +1099,9 @@ impl Arm {
         support: &[BodyId],
         allowed: &[(BodyId, f64)],
     ) -> SkillResult<Option<String>> {
-        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
         let mut hit = None;
         world.for_each_contact(self.robot, |c| {
-            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
-            if hit.is_some() || on_support || held.contains(&c.other) {
+            if hit.is_some() || !self.counts(c, support) {
                 return;
             }
             let limit = allowed
@@ -1126,12 +1124,10 @@ impl Arm {
     /// held object excluded), each with the force it may reach before it counts as a
     /// collision: twice its largest contact force now plus `contact_force`.
     fn pressing(&self, world: &World, support: &[BodyId]) -> SkillResult<Vec<(BodyId, f64)>> {
-        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
         let mut out: Vec<(BodyId, f64)> = Vec::new();
         world.for_each_contact(self.robot, |c| {
-            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
             let f = c.force.norm();
-            if on_support || held.contains(&c.other) || f <= self.settings.contact_force {
+            if !self.counts(c, support) || f <= self.settings.contact_force {
                 return;
             }
             let limit = 2.0 * f + self.settings.contact_force;
@@ -1145,15 +1141,21 @@ impl Arm {
 
     /// The sum of contact forces on the arm's links (support contacts excluded), N.
     fn arm_force(&self, world: &World, support: &[BodyId]) -> SkillResult<f64> {
-        let held: &[BodyId] = self.held.as_ref().map_or(&[], |h| &h.bodies);
         let mut sum = 0.0;
         world.for_each_contact(self.robot, |c| {
-            let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
-            if !on_support && !held.contains(&c.other) {
+            if self.counts(c, support) {
                 sum += c.force.norm();
             }
         })?;
         Ok(sum)
+    }
+
+    /// Whether a contact of the robot counts as touching something: not a support link on
+    /// one of the `support` bodies, not the held object.
+    fn counts(&self, c: &ContactRef<'_>, support: &[BodyId]) -> bool {
+        let on_support = support.contains(&c.other) && self.settings.support_links.iter().any(|l| *l == c.link);
+        let held = self.held.as_ref().is_some_and(|h| h.bodies.contains(&c.other));
+        !on_support && !held
     }
 
     /// The chain configurations of a straight-line move of the tip from where it is now, one

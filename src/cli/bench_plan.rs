@@ -284,7 +284,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         BiRrt {
                             range: a.range.or(birrt_step(&set.robot)),
                             dynamic_domain,
-                            balance: true,
+                            ..BiRrt::default()
                         }
                         .plan(&mut motion, &mut v, &request, &budget, &mut rng)
                     }
