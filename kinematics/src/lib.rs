@@ -40,8 +40,10 @@ mod ik;
 mod jacobian;
 mod mesh;
 mod model;
+mod pair_table;
 mod resolve;
 mod self_collision;
+pub mod spheres;
 mod urdf;
 
 pub use builtin::{BUILTIN_ROBOTS, BuiltinRobot, builtin_names};
@@ -51,6 +53,7 @@ pub use error::{KinematicsError, Result};
 pub use fk::FkSubset;
 pub use ik::{IkError, IkMethod, IkSettings, IkSolution, IkSolver, IkTarget};
 pub use mesh::{MeshCollision, load_mesh};
+pub use pair_table::PairTable;
 pub use model::{
     ChainSpec, Collision, Dynamics, Geometry, Inertial, Joint, JointKind, JointLimits, Link, LinkShape, Mimic,
     RobotModel, TriangleMesh, Visual,

@@ -236,6 +236,9 @@ pub struct ChainSpec {
     pub tip: String,
 }
 
+/// Clearance tables by (smaller, larger) link index; `None`: the pair has none.
+pub(crate) type PairTables = HashMap<(usize, usize), Option<Arc<crate::pair_table::PairTable>>>;
+
 pub(crate) struct ModelData {
     pub(crate) name: String,
     pub(crate) source_name: String,
@@ -254,6 +257,10 @@ pub(crate) struct ModelData {
     pub(crate) chains: Vec<ChainSpec>,
     pub(crate) fk: FkProgram,
     pub(crate) fingerprint: u64,
+    /// Per link: a conservative sphere cover of its collision shape, built on first use.
+    /// Clearance tables of link pairs, built on first request (`None`: the pair has none).
+    pub(crate) pair_tables: std::sync::Mutex<PairTables>,
+    pub(crate) sphere_covers: std::sync::OnceLock<Arc<Vec<Vec<crate::spheres::Sphere>>>>,
 }
 
 /// An immutable robot description: a tree of links connected by joints, with limits and
@@ -383,6 +390,42 @@ impl RobotModel {
     /// The link's collision geometry merged into one shape, or `None` if it has none.
     pub fn link_shape(&self, link: usize) -> Option<&LinkShape> {
         self.0.link_shapes.get(link).and_then(Option::as_ref)
+    }
+
+    /// A few balls (in the link frame) whose union contains the link's whole collision shape,
+    /// or an empty slice for a link without one. Built once per model on first use (tens of
+    /// milliseconds for every link of the Fetch); see [`crate::spheres`] for how.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let l = panda.link_index("panda_link4").unwrap();
+    /// let balls = panda.link_spheres(l);
+    /// assert!(balls.len() > 1 && balls.iter().all(|b| b.radius > 0.0));
+    /// ```
+    pub fn link_spheres(&self, link: usize) -> &[crate::spheres::Sphere] {
+        let covers = self.0.sphere_covers.get_or_init(|| crate::spheres::covers(self));
+        covers.get(link).map_or(&[], Vec::as_slice)
+    }
+
+    /// The clearance table of links `a` and `b` (see [`PairTable`](crate::PairTable)), built
+    /// on the first request for the pair; `None` when their relative pose depends on more than
+    /// two joints (or on joints without finite limits). The same table is returned for
+    /// `(a, b)` and `(b, a)`.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let (l5, l7) = (panda.link_index("panda_link5").unwrap(), panda.link_index("panda_link7").unwrap());
+    /// assert!(panda.pair_table(l5, l7).is_some());
+    /// ```
+    pub fn pair_table(&self, a: usize, b: usize) -> Option<Arc<crate::pair_table::PairTable>> {
+        let key = (a.min(b), a.max(b));
+        let mut tables = self.0.pair_tables.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        tables
+            .entry(key)
+            .or_insert_with(|| crate::pair_table::PairTable::build(self, key.0, key.1).map(Arc::new))
+            .clone()
     }
 
     /// A buffer with one identity pose per link, for [`RobotModel::fk`].

@@ -453,6 +453,8 @@ pub(crate) fn build(
         link_shapes,
         chains,
         fk: FkProgram { ops },
+        sphere_covers: std::sync::OnceLock::new(),
+        pair_tables: std::sync::Mutex::default(),
     };
     Ok(RobotModel(Arc::new(data)))
 }

@@ -2,12 +2,12 @@
 
 use std::sync::Arc;
 
-use hearth_kinematics::{Chain, FkSubset, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
+use hearth_kinematics::{Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
 use nalgebra::{Isometry3, Point3};
 use parry3d::math::Vector;
 use parry3d::shape::{Ball, SharedShape};
 
-use crate::obstacles::{ObstacleId, Obstacles};
+use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
@@ -116,6 +116,9 @@ pub struct RobotValidity {
     link_moves: Vec<bool>,
     /// Per checked pair: whether either link moves with the chain.
     pair_moves: Vec<bool>,
+    /// Per checked pair: the model's clearance table for it, where it has one (pairs whose
+    /// relative pose depends on one or two joints), consulted before any geometry.
+    pair_tables: Vec<Option<Arc<PairTable>>>,
     /// Whether the links and pairs that never move with the chain are clear, once known for
     /// the current reference, base and obstacles.
     fixed_clear: Option<bool>,
@@ -132,9 +135,6 @@ const BOUND_SLACK_ABS: f64 = 1e-4;
 /// Relative slack added to every bounding radius (same purpose).
 const BOUND_SLACK_REL: f64 = 1e-3;
 
-/// How many consecutive geometric links share one enclosing ball in the obstacle pre-test.
-const OBSTACLE_GROUP: usize = 4;
-
 /// Conservative broad phase: one bounding sphere per link with geometry (in the link frame,
 /// slightly inflated), used to skip exact tests that provably cannot report contact.
 ///
@@ -148,9 +148,11 @@ const OBSTACLE_GROUP: usize = 4;
 struct BroadPhase {
     /// Per link (indexed by link id): centre of the bounding sphere in the link frame.
     local_center: Vec<Point3<f64>>,
-    /// Groups of consecutive geometric links (indices into `geometric`) tested against the
-    /// obstacles with one enclosing ball first.
-    groups: Vec<std::ops::Range<usize>>,
+    /// Geometric links (indices into `geometric`) that move with the chain, asked about in
+    /// one batch (at most `BallBatch::CAPACITY`; the rest one by one).
+    moving: Vec<usize>,
+    /// Scratch batch of balls (reused, no allocation per check).
+    batch: BallBatch,
     /// Per link: inflated bounding radius (0 for links without geometry).
     radius: Vec<f64>,
     /// Per geometric link (same order as `RobotValidity::geometric`): the bounding ball.
@@ -161,6 +163,11 @@ struct BroadPhase {
     part_range: Vec<std::ops::Range<usize>>,
     /// Bounding spheres of every link's parts: centre in the link frame and inflated radius.
     parts: Vec<(Point3<f64>, f64)>,
+    /// Per link: range into `cover` of the balls covering it (empty: no cover, exact tests).
+    cover_range: Vec<std::ops::Range<usize>>,
+    /// Balls whose union covers each link (see `RobotModel::link_spheres`): centre in the
+    /// link frame and inflated radius. Tested against the obstacles before exact tests.
+    cover: Vec<(Point3<f64>, f64)>,
     /// World centres of `parts` for the current configuration, filled lazily per link.
     parts_world: Vec<Point3<f64>>,
     /// Per link: the value of `epoch` when its `parts_world` were last filled.
@@ -195,18 +202,23 @@ impl BroadPhase {
         let mut balls = Vec::with_capacity(geometric.len());
         let mut part_range = vec![0..0; n];
         let mut parts = Vec::new();
-        let inflate = |r: f32| {
-            let r = f64::from(r);
+        let mut cover_range = vec![0..0; n];
+        let mut cover = Vec::new();
+        let inflate_f64 = |r: f64| {
             if r.is_finite() {
                 r * (1.0 + BOUND_SLACK_REL) + BOUND_SLACK_ABS
             } else {
                 f64::INFINITY
             }
         };
+        let inflate = |r: f32| inflate_f64(f64::from(r));
         let p64 = |c: Vector| Point3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
         for &l in geometric {
             let s = model.link_shape(l).expect("geometric link has a shape");
             let start = parts.len();
+            let cover_start = cover.len();
+            cover.extend(model.link_spheres(l).iter().map(|b| (b.center, inflate_f64(b.radius))));
+            cover_range[l] = cover_start..cover.len();
             if let Some(compound) = s.shape.as_compound() {
                 for (pose, part) in compound.shapes() {
                     let bs = part.compute_bounding_sphere(pose);
@@ -239,12 +251,11 @@ impl BroadPhase {
             })
             .collect();
         let n_parts = parts.len();
-        let groups = (0..geometric.len())
-            .step_by(OBSTACLE_GROUP)
-            .map(|g| g..(g + OBSTACLE_GROUP).min(geometric.len()))
-            .collect();
         Self {
-            groups,
+            cover_range,
+            cover,
+            moving: Vec::new(),
+            batch: BallBatch::new(),
             local_center,
             radius,
             balls,
@@ -276,12 +287,20 @@ impl RobotValidity {
         let broad = BroadPhase::new(&model, &geometric, &pairs);
         let moves = moving_links(&model, &chain);
         let moving_fk = model.fk_subset(|l| moves[l]);
-        let link_moves = geometric.iter().map(|&l| moves[l]).collect();
-        let pair_moves = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
+        let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
+        let mut broad = broad;
+        broad.moving = (0..geometric.len()).filter(|&i| link_moves[i]).collect();
+        let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
+        let pair_tables = pairs
+            .iter()
+            .zip(&pair_moves)
+            .map(|(&(a, b), &m)| if m { model.pair_table(a, b) } else { None })
+            .collect();
         Self {
             broad,
             link_moves,
             pair_moves,
+            pair_tables,
             fixed_clear: None,
             moving_fk,
             fixed_poses_current: false,
@@ -369,37 +388,34 @@ impl RobotValidity {
         }
     }
 
-    /// Whether the ball enclosing the bounding spheres of geometric links `range` touches any
-    /// obstacle (if not, none of those links can).
-    fn group_may_hit(&self, range: std::ops::Range<usize>) -> bool {
-        let b = &self.broad;
-        let n = range.len() as f64;
-        let mut c = nalgebra::Vector3::zeros();
-        for i in range.clone() {
-            c += b.world_center[self.geometric[i]].coords;
-        }
-        let c = Point3::from(c / n);
-        let mut r = 0.0f64;
-        for i in range {
-            let l = self.geometric[i];
-            r = r.max((b.world_center[l] - c).norm() + b.radius[l]);
-        }
-        if !r.is_finite() {
-            return true;
-        }
-        let radius = (r * (1.0 + 1e-6) + 1e-6) as f32;
-        self.obstacles
-            .ball_hits(Vector::new(c.x as f32, c.y as f32, c.z as f32), radius)
-    }
-
     /// Broad phase + exact test of geometric link number `i` against the obstacles.
     #[inline]
-    fn link_blocked(&self, i: usize) -> bool {
+    fn link_blocked(&mut self, i: usize) -> bool {
         let l = self.geometric[i];
         let c = &self.broad.world_center[l];
         if self.broad.radius[l].is_finite() {
             let center = Vector::new(c.x as f32, c.y as f32, c.z as f32);
             if !self.obstacles.ball_hits(center, self.broad.balls[i].radius) {
+                return false;
+            }
+        }
+        self.covered_link_blocked(i)
+    }
+
+    /// Geometric link number `i`, whose bounding ball touches something: the balls covering
+    /// it (one batch), then the exact test.
+    fn covered_link_blocked(&mut self, i: usize) -> bool {
+        let l = self.geometric[i];
+        let b = &mut self.broad;
+        let range = b.cover_range[l].clone();
+        if !range.is_empty() && b.radius[l].is_finite() {
+            let pose = &self.poses[l];
+            b.batch.clear();
+            for k in range {
+                let c = pose * b.cover[k].0;
+                b.batch.push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
+            }
+            if self.obstacles.balls_touching(&b.batch) == 0 {
                 return false;
             }
         }
@@ -424,6 +440,11 @@ impl RobotValidity {
         let (a, b) = self.pairs[i];
         let d2 = (self.broad.world_center[a] - self.broad.world_center[b]).norm_squared();
         if d2 > self.broad.pair_reach2[i] {
+            return false;
+        }
+        if let Some(table) = &self.pair_tables[i]
+            && table.certainly_clear(&self.model, &self.q_full)
+        {
             return false;
         }
         // Second level: every part sphere of `a` against every part sphere of `b`.
@@ -510,16 +531,28 @@ impl RobotValidity {
             return true;
         }
         let skip = self.broad.hint;
-        for g in 0..self.broad.groups.len() {
-            let range = self.broad.groups[g].clone();
-            if range.len() > 1 && !self.group_may_hit(range.clone()) {
-                continue;
+        // Every moving link's bounding ball in one batch, then the links whose ball touches.
+        let b = &mut self.broad;
+        b.batch.clear();
+        for &i in b.moving.iter().take(BallBatch::CAPACITY) {
+            let l = self.geometric[i];
+            let c = b.world_center[l];
+            b.batch.push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.balls[i].radius);
+        }
+        let mut near = self.obstacles.balls_touching(&self.broad.batch);
+        while near != 0 {
+            let i = self.broad.moving[near.trailing_zeros() as usize];
+            near &= near - 1;
+            if skip != Hint::Link(i) && self.covered_link_blocked(i) {
+                self.broad.hint = Hint::Link(i);
+                return true;
             }
-            for i in range {
-                if self.link_moves[i] && skip != Hint::Link(i) && self.link_blocked(i) {
-                    self.broad.hint = Hint::Link(i);
-                    return true;
-                }
+        }
+        for k in BallBatch::CAPACITY..self.broad.moving.len() {
+            let i = self.broad.moving[k];
+            if skip != Hint::Link(i) && self.link_blocked(i) {
+                self.broad.hint = Hint::Link(i);
+                return true;
             }
         }
         for i in 0..self.pairs.len() {
@@ -631,3 +664,4 @@ impl StateValidator for RobotValidity {
         self.checks
     }
 }
+

@@ -27,6 +27,7 @@
 //! assert_eq!(scene.name(id), Some("table"));
 //! ```
 
+mod balls;
 mod scene;
 
 use std::fmt;
@@ -35,6 +36,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Real, Rotation, Vector};
 use parry3d::shape::{Shape, SharedShape, TriMeshBuilderError};
 
+pub use balls::BallBatch;
 pub use scene::ParryScene;
 
 /// The nearest leaf of `bvh` to the box `query` within `max_dist`, for implementations of
@@ -148,6 +150,18 @@ pub trait Obstacles: Send + Sync {
     /// answer.
     fn ball_hits(&self, center: Vector, radius: Real) -> bool {
         self.intersects(&parry3d::shape::Ball::new(radius), &Pose::from_translation(center))
+    }
+
+    /// Which balls of `balls` touch anything (within the margin): bit `i` of the answer is
+    /// [`Obstacles::ball_hits`] for ball `i`. Implementations may test the balls together
+    /// (the default asks about them one by one) and must give the same answer.
+    fn balls_touching(&self, balls: &BallBatch) -> u64 {
+        let mut hit = 0;
+        for i in 0..balls.len() {
+            let (c, r) = balls.ball(i);
+            hit |= u64::from(self.ball_hits(c, r)) << i;
+        }
+        hit
     }
 
     /// The smallest distance from `shape` at `pose` to any obstacle, and which obstacle, if it

@@ -6,7 +6,7 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::{self, Ray};
 use parry3d::shape::Shape;
 
-use super::{Obstacle, ObstacleId, Obstacles, nearest_leaf};
+use super::{BallBatch, Obstacle, ObstacleId, Obstacles, nearest_leaf};
 
 /// A static obstacle scene: named parry shapes at fixed world poses, with a BVH over their
 /// bounding boxes built once at construction.
@@ -202,6 +202,8 @@ enum Quick {
     Cuboid {
         pose: Pose,
         half: Vector,
+        /// The box's local axes in the world (rows of the world-to-box rotation).
+        axes: [Vector; 3],
     },
     Ball {
         center: Vector,
@@ -229,6 +231,7 @@ impl Quick {
             Quick::Cuboid {
                 pose: o.pose,
                 half: c.half_extents,
+                axes: [Vector::X, Vector::Y, Vector::Z].map(|a| o.pose.transform_vector(a)),
             }
         } else if let Some(b) = s.as_ball() {
             Quick::Ball {
@@ -256,7 +259,7 @@ impl Quick {
     #[inline]
     fn ball(&self, center: Vector, radius: Real) -> Option<bool> {
         Some(match self {
-            Quick::Cuboid { pose, half } => {
+            Quick::Cuboid { pose, half, .. } => {
                 let p = pose.inverse_transform_point(center);
                 let d = (p.abs() - *half).max(Vector::ZERO);
                 d.length_squared() <= radius * radius
@@ -288,7 +291,107 @@ impl Quick {
     }
 }
 
+impl Quick {
+    /// Bits of the balls `0..n` of `b` (radii grown by `margin`) this obstacle touches, eight
+    /// balls per step; `None` when parry must decide. Bits at and above `n` are garbage.
+    #[inline]
+    fn balls(&self, b: &BallBatch, n: usize, margin: Real) -> Option<u64> {
+        /// Runs `touch(x, y, z, r)` on every lane, eight at a time.
+        #[inline(always)]
+        fn lanes(b: &BallBatch, n: usize, margin: Real, touch: impl Fn(Real, Real, Real, Real) -> bool) -> u64 {
+            let mut hit = 0u64;
+            for chunk in 0..n.div_ceil(8) {
+                let o = chunk * 8;
+                let mut m = 0u64;
+                for k in 0..8 {
+                    let j = o + k;
+                    m |= u64::from(touch(b.x[j], b.y[j], b.z[j], b.r[j] + margin)) << k;
+                }
+                hit |= m << o;
+            }
+            hit
+        }
+        Some(match *self {
+            Quick::Cuboid { pose, half, axes } => {
+                let t = pose.translation;
+                lanes(b, n, margin, |x, y, z, r| {
+                    let (dx, dy, dz) = (x - t.x, y - t.y, z - t.z);
+                    let out = |a: Vector, h: Real| ((dx * a.x + dy * a.y + dz * a.z).abs() - h).max(0.0);
+                    let (ox, oy, oz) = (out(axes[0], half.x), out(axes[1], half.y), out(axes[2], half.z));
+                    ox * ox + oy * oy + oz * oz <= r * r
+                })
+            }
+            Quick::Ball { center: c, radius: rc } => lanes(b, n, margin, |x, y, z, r| {
+                let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
+                dx * dx + dy * dy + dz * dz <= (r + rc) * (r + rc)
+            }),
+            Quick::Cylinder { .. } | Quick::Capsule { .. } => {
+                let mut hit = 0u64;
+                for j in 0..n {
+                    let (c, r) = b.ball(j);
+                    hit |= u64::from(self.ball(c, r + margin)?) << j;
+                }
+                hit
+            }
+            Quick::Other => return None,
+        })
+    }
+}
+
 impl Obstacles for ParryScene {
+    fn balls_touching(&self, balls: &BallBatch) -> u64 {
+        let all = balls.mask();
+        let n = balls.len();
+        let mut hit = 0u64;
+        for j in 0..n {
+            let (c, r) = balls.ball(j);
+            if !(c.is_finite() && (r + self.margin).is_finite()) {
+                hit |= 1 << j;
+            }
+        }
+        if self.quick.len() > 64 {
+            for j in 0..n {
+                let (c, r) = balls.ball(j);
+                if hit & (1 << j) == 0 && self.ball_hits(c, r) {
+                    hit |= 1 << j;
+                }
+            }
+            return hit;
+        }
+        // The batch's bounding box picks the obstacles worth testing lane by lane.
+        let (mut lo, mut hi) = (Vector::splat(Real::MAX), Vector::splat(Real::MIN));
+        for j in 0..n {
+            let (c, r) = balls.ball(j);
+            let r = Vector::splat(r + self.margin);
+            lo = lo.min(c - r);
+            hi = hi.max(c + r);
+        }
+        let [x0, y0, z0, x1, y1, z1] = &self.boxes.bounds;
+        for i in 0..self.quick.len() {
+            if x0[i] > hi.x || y0[i] > hi.y || z0[i] > hi.z || x1[i] < lo.x || y1[i] < lo.y || z1[i] < lo.z {
+                continue;
+            }
+            let q = &self.quick[i];
+            match q.balls(balls, n, self.margin) {
+                Some(m) => hit |= m & all,
+                None => {
+                    for j in 0..n {
+                        if hit & (1 << j) == 0 {
+                            let (c, r) = balls.ball(j);
+                            if self.touches(i as u32, &parry3d::shape::Ball::new(r), &Pose::from_translation(c)) {
+                                hit |= 1 << j;
+                            }
+                        }
+                    }
+                }
+            }
+            if hit == all {
+                break;
+            }
+        }
+        hit
+    }
+
     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
         if self.obstacles.is_empty() {
             return None;
