@@ -53,11 +53,11 @@ pub use error::{KinematicsError, Result};
 pub use fk::FkSubset;
 pub use ik::{IkError, IkMethod, IkSettings, IkSolution, IkSolver, IkTarget};
 pub use mesh::{MeshCollision, load_mesh};
-pub use pair_table::PairTable;
 pub use model::{
     ChainSpec, Collision, Dynamics, Geometry, Inertial, Joint, JointKind, JointLimits, Link, LinkShape, Mimic,
     RobotModel, TriangleMesh, Visual,
 };
+pub use pair_table::PairTable;
 pub use resolve::{PACKAGE_PATH_ENV, PackageResolver};
 pub use self_collision::{DisabledReason, SelfCollisionMatrix, SelfCollisionSettings, links_touch};
 pub use urdf::LoadOptions;

@@ -421,7 +421,11 @@ impl RobotModel {
     /// ```
     pub fn pair_table(&self, a: usize, b: usize) -> Option<Arc<crate::pair_table::PairTable>> {
         let key = (a.min(b), a.max(b));
-        let mut tables = self.0.pair_tables.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut tables = self
+            .0
+            .pair_tables
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         tables
             .entry(key)
             .or_insert_with(|| crate::pair_table::PairTable::build(self, key.0, key.1).map(Arc::new))

@@ -234,10 +234,14 @@ fn motion(model: &RobotModel, j: usize, q: &[f64]) -> Isometry3<f64> {
     let v = joint.variable.map_or(0.0, |i| q[i]);
     match joint.kind {
         JointKind::Fixed => Isometry3::identity(),
-        JointKind::Prismatic => Isometry3::from_parts(Translation3::from(joint.axis.into_inner() * v), UnitQuaternion::identity()),
-        JointKind::Revolute | JointKind::Continuous => {
-            Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&joint.axis, v))
-        }
+        JointKind::Prismatic => Isometry3::from_parts(
+            Translation3::from(joint.axis.into_inner() * v),
+            UnitQuaternion::identity(),
+        ),
+        JointKind::Revolute | JointKind::Continuous => Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_axis_angle(&joint.axis, v),
+        ),
     }
 }
 
@@ -287,15 +291,20 @@ mod tests {
                 }
             }
             assert!(certified > 3000 / 2, "{robot}: only {certified} of 3000 certified");
-            assert!(touching > 0 || robot == "fetch", "{robot}: no touching sample, test too weak");
+            assert!(
+                touching > 0 || robot == "fetch",
+                "{robot}: no touching sample, test too weak"
+            );
         }
     }
 
     #[test]
     fn pairs_far_apart_in_the_tree_have_no_table() {
         let m = RobotModel::builtin("panda").unwrap();
-        let (a, b) = (m.link_index("panda_link0").unwrap(), m.link_index("panda_hand").unwrap());
+        let (a, b) = (
+            m.link_index("panda_link0").unwrap(),
+            m.link_index("panda_hand").unwrap(),
+        );
         assert!(m.pair_table(a, b).is_none());
     }
 }
-

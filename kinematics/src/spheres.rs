@@ -157,7 +157,8 @@ pub fn cover(link: &LinkShape) -> Vec<Sphere> {
 
 /// `k` balls around clusters of `pts` (farthest-point seeds, Lloyd iterations).
 fn cluster(pts: &[(Point3<f64>, f64)], k: usize) -> Vec<Sphere> {
-    let centroid = Point3::from(pts.iter().fold(nalgebra::Vector3::zeros(), |s, (p, _)| s + p.coords) / pts.len() as f64);
+    let centroid =
+        Point3::from(pts.iter().fold(nalgebra::Vector3::zeros(), |s, (p, _)| s + p.coords) / pts.len() as f64);
     let mut centers = Vec::with_capacity(k);
     let mut dist = vec![f64::INFINITY; pts.len()];
     let mut next = far_from(pts, &centroid);

@@ -413,7 +413,8 @@ impl RobotValidity {
             b.batch.clear();
             for k in range {
                 let c = pose * b.cover[k].0;
-                b.batch.push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
+                b.batch
+                    .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
             }
             if self.obstacles.balls_touching(&b.batch) == 0 {
                 return false;
@@ -537,7 +538,8 @@ impl RobotValidity {
         for &i in b.moving.iter().take(BallBatch::CAPACITY) {
             let l = self.geometric[i];
             let c = b.world_center[l];
-            b.batch.push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.balls[i].radius);
+            b.batch
+                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.balls[i].radius);
         }
         let mut near = self.obstacles.balls_touching(&self.broad.batch);
         while near != 0 {
@@ -664,4 +666,3 @@ impl StateValidator for RobotValidity {
         self.checks
     }
 }
-

@@ -83,6 +83,10 @@ impl BallBatch {
 
     /// A mask with one bit per ball held.
     pub fn mask(&self) -> u64 {
-        if self.len == Self::CAPACITY { u64::MAX } else { (1u64 << self.len) - 1 }
+        if self.len == Self::CAPACITY {
+            u64::MAX
+        } else {
+            (1u64 << self.len) - 1
+        }
     }
 }
