@@ -16,7 +16,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Point3};
 
 use crate::convert::to_pose;
 use crate::model::{JointKind, RobotModel};
@@ -68,8 +68,6 @@ pub struct PairTable {
     /// The ancestor link and the descendant.
     a: usize,
     b: usize,
-    /// Joints from `a` down to `b`, fixed ones included.
-    path: Vec<usize>,
     axes: Vec<Axis>,
     /// Per level, the exact distance between the links at each cell's centre (f32 bits,
     /// row-major over `axes`; [`UNKNOWN`] until first needed).
@@ -109,16 +107,15 @@ impl PairTable {
             let joint = &model.joints()[j];
             q[joint.variable?] = joint.limits.lower;
         }
-        let mut origin_of = Vec::new();
-        let mut pose = Isometry3::identity();
-        for &j in &path {
-            let joint = &model.joints()[j];
-            let frame = pose * joint.origin;
-            if joint.kind != JointKind::Fixed {
-                origin_of.push(Point3::from(frame.translation.vector));
-            }
-            pose = frame * motion(model, j, &q);
-        }
+        let poses = relative_poses(model, a, &q)?;
+        let origin_of: Vec<Point3<f64>> = movable
+            .iter()
+            .map(|&j| {
+                let joint = &model.joints()[j];
+                Point3::from((poses[joint.parent] * joint.origin).translation.vector)
+            })
+            .collect();
+        let pose = poses[b];
         let far: Vec<(Point3<f64>, f64)> = model
             .link_spheres(b)
             .iter()
@@ -162,13 +159,7 @@ impl PairTable {
                 (0..n).map(|_| AtomicU32::new(UNKNOWN)).collect()
             })
             .collect();
-        Some(Self {
-            a,
-            b,
-            path,
-            axes,
-            levels,
-        })
+        Some(Self { a, b, axes, levels })
     }
 
     /// Whether the two links provably do not touch in configuration `q_full` (a full
@@ -215,10 +206,10 @@ impl PairTable {
             let step = ax.range / (ax.base << level) as f64;
             q[ax.var] = ax.lower + (k as f64 + 0.5) * step;
         }
-        let mut pose = Isometry3::identity();
-        for &j in &self.path {
-            pose = pose * model.joints()[j].origin * motion(model, j, &q);
-        }
+        let Some(poses) = relative_poses(model, self.a, &q) else {
+            return 0.0;
+        };
+        let pose = poses[self.b];
         let (Some(sa), Some(sb)) = (model.link_shape(self.a), model.link_shape(self.b)) else {
             return 0.0;
         };
@@ -228,21 +219,12 @@ impl PairTable {
     }
 }
 
-/// The joint's motion for configuration `q` (its own variable; fixed joints: identity).
-fn motion(model: &RobotModel, j: usize, q: &[f64]) -> Isometry3<f64> {
-    let joint = &model.joints()[j];
-    let v = joint.variable.map_or(0.0, |i| q[i]);
-    match joint.kind {
-        JointKind::Fixed => Isometry3::identity(),
-        JointKind::Prismatic => Isometry3::from_parts(
-            Translation3::from(joint.axis.into_inner() * v),
-            UnitQuaternion::identity(),
-        ),
-        JointKind::Revolute | JointKind::Continuous => Isometry3::from_parts(
-            Translation3::identity(),
-            UnitQuaternion::from_axis_angle(&joint.axis, v),
-        ),
-    }
+/// Every link's pose in link `a`'s frame for the full configuration `q`.
+fn relative_poses(model: &RobotModel, a: usize, q: &[f64]) -> Option<Vec<Isometry3<f64>>> {
+    let mut poses = model.pose_buffer();
+    model.fk(q, &mut poses).ok()?;
+    let to_a = poses[a].inverse();
+    Some(poses.iter().map(|p| to_a * p).collect())
 }
 
 /// The joints from ancestor `a` down to `b`, if `a` is an ancestor of `b`.

@@ -195,7 +195,8 @@ enum Hint {
 }
 
 impl BroadPhase {
-    fn new(model: &RobotModel, geometric: &[usize], pairs: &[(usize, usize)]) -> Self {
+    /// `link_moves`: per geometric link, whether it moves with the chain.
+    fn new(model: &RobotModel, geometric: &[usize], pairs: &[(usize, usize)], link_moves: &[bool]) -> Self {
         let n = model.links().len();
         let mut local_center = vec![Point3::origin(); n];
         let mut radius = vec![0.0; n];
@@ -254,7 +255,7 @@ impl BroadPhase {
         Self {
             cover_range,
             cover,
-            moving: Vec::new(),
+            moving: (0..geometric.len()).filter(|&i| link_moves[i]).collect(),
             batch: BallBatch::new(),
             local_center,
             radius,
@@ -284,12 +285,10 @@ impl RobotValidity {
             .filter(|&l| model.link_shape(l).is_some())
             .collect();
         let pairs = matrix.checked_geometric_pairs(&model);
-        let broad = BroadPhase::new(&model, &geometric, &pairs);
         let moves = moving_links(&model, &chain);
         let moving_fk = model.fk_subset(|l| moves[l]);
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
-        let mut broad = broad;
-        broad.moving = (0..geometric.len()).filter(|&i| link_moves[i]).collect();
+        let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves);
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         let pair_tables = pairs
             .iter()

@@ -156,12 +156,7 @@ pub trait Obstacles: Send + Sync {
     /// [`Obstacles::ball_hits`] for ball `i`. Implementations may test the balls together
     /// (the default asks about them one by one) and must give the same answer.
     fn balls_touching(&self, balls: &BallBatch) -> u64 {
-        let mut hit = 0;
-        for i in 0..balls.len() {
-            let (c, r) = balls.ball(i);
-            hit |= u64::from(self.ball_hits(c, r)) << i;
-        }
-        hit
+        balls_one_by_one(self, balls)
     }
 
     /// The smallest distance from `shape` at `pose` to any obstacle, and which obstacle, if it
@@ -178,6 +173,16 @@ pub trait Obstacles: Send + Sync {
 
     /// The obstacle's name, for messages; `None` for an unknown id.
     fn name(&self, id: ObstacleId) -> Option<&str>;
+}
+
+/// [`Obstacles::balls_touching`] answered through [`Obstacles::ball_hits`], one ball at a time.
+pub(crate) fn balls_one_by_one<O: Obstacles + ?Sized>(obstacles: &O, balls: &BallBatch) -> u64 {
+    let mut hit = 0;
+    for i in 0..balls.len() {
+        let (c, r) = balls.ball(i);
+        hit |= u64::from(obstacles.ball_hits(c, r)) << i;
+    }
+    hit
 }
 
 /// One named static obstacle: a parry shape at a world pose.

@@ -6,7 +6,11 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::{self, Ray};
 use parry3d::shape::Shape;
 
-use super::{BallBatch, Obstacle, ObstacleId, Obstacles, nearest_leaf};
+use super::{BallBatch, Obstacle, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
+
+/// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
+/// time) instead of descending the BVH.
+const SCAN_LIMIT: usize = 64;
 
 /// A static obstacle scene: named parry shapes at fixed world poses, with a BVH over their
 /// bounding boxes built once at construction.
@@ -340,6 +344,9 @@ impl Quick {
 
 impl Obstacles for ParryScene {
     fn balls_touching(&self, balls: &BallBatch) -> u64 {
+        if self.quick.len() > SCAN_LIMIT {
+            return balls_one_by_one(self, balls);
+        }
         let all = balls.mask();
         let n = balls.len();
         let mut hit = 0u64;
@@ -348,15 +355,6 @@ impl Obstacles for ParryScene {
             if !(c.is_finite() && (r + self.margin).is_finite()) {
                 hit |= 1 << j;
             }
-        }
-        if self.quick.len() > 64 {
-            for j in 0..n {
-                let (c, r) = balls.ball(j);
-                if hit & (1 << j) == 0 && self.ball_hits(c, r) {
-                    hit |= 1 << j;
-                }
-            }
-            return hit;
         }
         // The batch's bounding box picks the obstacles worth testing lane by lane.
         let (mut lo, mut hi) = (Vector::splat(Real::MAX), Vector::splat(Real::MIN));
@@ -408,7 +406,7 @@ impl Obstacles for ParryScene {
         if !(center.is_finite() && r.is_finite()) {
             return true;
         }
-        if self.quick.len() <= 64 {
+        if self.quick.len() <= SCAN_LIMIT {
             let ball = || parry3d::shape::Ball::new(radius);
             return self.boxes.any_near(center, r, |i| {
                 self.quick[i]
