@@ -18,11 +18,11 @@ fn home() -> SceneFile {
 }
 
 /// Bodies a model becomes: its root plus one per movable joint (fixed joints merge links),
-/// plus the mount its multibody hangs from when it is a free object whose links move (see
-/// `World::spawn_model`); robots and fixed bases keep their root in the multibody.
-fn body_groups(model: &RobotModel, is_robot: bool, fixed: bool) -> usize {
+/// plus the mount its multibody hangs from when it is an object whose links move (see
+/// `World::spawn_model`); robots keep their root in the multibody.
+fn body_groups(model: &RobotModel, is_robot: bool) -> usize {
     let moving = model.joints().iter().filter(|j| j.kind != JointKind::Fixed).count();
-    let mount = usize::from(moving > 0 && !is_robot && !fixed);
+    let mount = usize::from(moving > 0 && !is_robot);
     1 + moving + mount
 }
 
@@ -48,13 +48,7 @@ fn generated_home_loads_settles_and_stays_above_the_floor() {
     assert_eq!(loaded.building.len(), walls + slabs);
     let model_bodies: usize = loaded
         .models()
-        .map(|m| {
-            let fixed = scene
-                .objects
-                .iter()
-                .any(|o| o.fixed && loaded.object(&o.name) == Some(m));
-            body_groups(world.model(m).unwrap(), Some(m) == loaded.robot, fixed)
-        })
+        .map(|m| body_groups(world.model(m).unwrap(), Some(m) == loaded.robot))
         .sum();
     assert_eq!(world.body_count(), 1 + walls + slabs + model_bodies);
     for &b in &loaded.building {

@@ -1,6 +1,7 @@
-//! Free furniture whose root is split off its multibody (`World::spawn_model`): the root body
+//! Furniture whose root is split off its multibody (`World::spawn_model`): a free root body
 //! and its mount move as one, the model keeps its mass, its own links never touch its root, its
-//! drawers still slide, and snapshots replay it exactly; fixed furniture is not split.
+//! drawers still slide, and snapshots replay it exactly; a fixed root hangs its multibody from
+//! a fixed mount, and its drawers and doors still move.
 
 use hearth_sim::kinematics::JointKind;
 use hearth_sim::scene::{SceneFile, SceneObject};
@@ -87,10 +88,9 @@ fn a_split_model_keeps_its_mass_and_never_touches_itself() {
             .map(|i| i.mass)
             .sum();
         let bodies = world.model_bodies(h).unwrap();
-        // Root, one body per moving joint, and the mount of the free dresser.
+        // Root, one body per moving joint, and the mount.
         let moving = model.joints().iter().filter(|j| j.kind != JointKind::Fixed).count();
-        let mount = usize::from(name == "dresser");
-        assert_eq!(bodies.len(), moving + 1 + mount, "{name}");
+        assert_eq!(bodies.len(), moving + 2, "{name}");
         if name == "dresser" {
             let sim_mass: f64 = bodies
                 .iter()
@@ -176,6 +176,51 @@ fn free_furniture_moves_as_one_and_its_drawers_still_slide() {
 }
 
 #[test]
+fn fixed_furniture_hangs_from_a_fixed_mount_and_its_joints_still_move() {
+    let (mut world, loaded, _) = furniture();
+    let cabinet = loaded.object("cabinet").unwrap();
+    let model = world.model(cabinet).unwrap().clone();
+    let root = world.link_body(cabinet, &model.links()[0].name).unwrap();
+    let bodies = world.model_bodies(cabinet).unwrap();
+    // The root (with colliders) and the collider-less mount are both fixed.
+    let fixed: Vec<_> = bodies
+        .iter()
+        .filter(|b| world.bodies()[b.handle()].is_fixed())
+        .collect();
+    assert_eq!(fixed.len(), 2, "root and mount are fixed");
+    assert!(!world.bodies()[root.handle()].colliders().is_empty());
+    let joint = model
+        .joints()
+        .iter()
+        .find(|j| j.kind != JointKind::Fixed)
+        .unwrap()
+        .clone();
+    let v = joint.variable.unwrap();
+    let name = model.variable_names()[v].clone();
+    let before = world.joint_positions(cabinet).unwrap()[v];
+    world
+        .set_joint_command(cabinet, &name, JointCommand::Effort { value: 20.0 })
+        .unwrap();
+    for _ in 0..30 {
+        world.step();
+    }
+    let q = world.joint_positions(cabinet).unwrap()[v];
+    assert!(q > before + 0.05, "`{name}` moved from {before} to {q}");
+    // The link sits where the joint puts it, relative to the fixed root.
+    let base = world.base_pose(cabinet).unwrap();
+    let mut poses = model.pose_buffer();
+    model.fk(&world.joint_positions(cabinet).unwrap(), &mut poses).unwrap();
+    let link = world.link_pose(cabinet, &model.links()[joint.child].name).unwrap();
+    let err = ((base * poses[joint.child]).translation.vector - link.translation.vector).norm();
+    assert!(err < 5e-3, "`{name}`'s link is {err} m from where its joint puts it");
+    // The root never touches its own links, and did not move.
+    for &b in &bodies {
+        assert!(!touching(&world, root, b), "the root touches its own body {b:?}");
+    }
+    assert!((base.translation.vector - Vector3::new(2.0, 0.0, 0.0)).norm() < 1e-6);
+}
+
+#[test]
 fn snapshots_replay_split_furniture_exactly() {
     let (mut world, loaded, _) = furniture();
     let dresser = loaded.object("dresser").unwrap();
@@ -225,9 +270,9 @@ fn mass_randomization_keeps_a_split_root_shared_half_and_half() {
 }
 
 #[test]
-fn without_the_split_a_free_dresser_is_one_multibody() {
+fn without_the_split_furniture_is_one_multibody() {
     let config = WorldConfig {
-        split_free_roots: false,
+        split_roots: false,
         ..WorldConfig::default()
     };
     let (mut world, loaded, _) = furniture_with(config);

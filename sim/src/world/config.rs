@@ -34,10 +34,11 @@ pub struct WorldConfig {
     /// Density (kg/m³) given to collision shapes of links that have no URDF inertial
     /// (default 500).
     pub default_density: f64,
-    /// Split the free root of objects whose links move (dressers, bookcases, laptops) off
-    /// their multibody, so that what rests on them takes rapier's fast two-body contact path
-    /// (default true; see [`super::World::spawn_model`]). Off, every model is one multibody.
-    pub split_free_roots: bool,
+    /// Split the root of objects whose links move (dressers, bookcases, laptops, cabinets,
+    /// counters, fridges) off their multibody, so that what rests on them takes rapier's fast
+    /// two-body contact path (default true; see [`super::World::spawn_model`]). Off, every
+    /// model is one multibody.
+    pub split_roots: bool,
 }
 
 impl Default for WorldConfig {
@@ -51,7 +52,7 @@ impl Default for WorldConfig {
             ground_plane: true,
             ground_friction: 0.8,
             default_density: 500.0,
-            split_free_roots: true,
+            split_roots: true,
         }
     }
 }

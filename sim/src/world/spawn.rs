@@ -214,17 +214,18 @@ impl World {
     /// damping and friction as joint damping and dry friction; mimic joints coupled to their
     /// leader. Every joint starts under position control holding the initial configuration.
     ///
-    /// The free root of an object whose links move (a model without a drive or a gripper on a
-    /// free base: a dresser, a bookcase, a laptop) is split in two: the root's colliders stay
-    /// on a plain dynamic body outside the multibody, and the multibody hangs from a second,
-    /// collider-less dynamic body (the mount) at the same pose, welded to the root body by a
-    /// fixed joint; the two share the root's mass properties half and half. Contacts between
-    /// the root body and the links that hang on it (all the model's links when self-collisions
-    /// are off) are dropped, as the multibody would drop them. Objects resting on such a
-    /// model's root (books on a bookcase's shelves) then touch a plain body, which rapier
-    /// solves on its fast two-body contact path instead of its multibody path. Robots and
-    /// fixed bases keep their root in the multibody, and so does every model when
-    /// [`WorldConfig::split_free_roots`](super::WorldConfig::split_free_roots) is off.
+    /// The root of an object whose links move (a model without a drive or a gripper: a
+    /// dresser, a bookcase, a laptop, a cabinet, a fridge) is split in two: the root's
+    /// colliders stay on a plain body outside the multibody, and the multibody hangs from a
+    /// second, collider-less body (the mount) at the same pose. On a free base both bodies are
+    /// dynamic, welded together by a fixed joint, and share the root's mass properties half and
+    /// half; on a fixed base both are fixed. Contacts between the root body and the links that
+    /// hang on it (all the model's links when self-collisions are off) are dropped, as the
+    /// multibody would drop them. Objects resting on such a model's root (books on a
+    /// bookcase's shelves, a mug in a counter's sink) then touch a plain body, which rapier
+    /// solves on its fast two-body contact path instead of its multibody path. Robots keep
+    /// their root in the multibody, and so does every model when
+    /// [`WorldConfig::split_roots`](super::WorldConfig::split_roots) is off.
     ///
     /// # Errors
     /// [`WorldError::InvalidModel`] when rapier refuses the articulation, and the usual
@@ -312,8 +313,8 @@ impl World {
         let sleeping = self.config.sleeping;
         let root_group = group[model.root()].0;
         let split =
-            self.config.split_free_roots && split_root(model, options.base, diff_drive.is_some() || gripper.is_some());
-        // Half of a free split root's mass properties: the root body's and the mount's.
+            self.config.split_roots && split_root(model, options.base, diff_drive.is_some() || gripper.is_some());
+        // Half of a free split root's mass properties (a fixed mount has none): the root body's and the mount's.
         let mut mount_mprops = MassProperties::default();
         let mut body_handles = Vec::with_capacity(group_heads.len());
         for (g, &head) in group_heads.iter().enumerate() {
@@ -349,7 +350,7 @@ impl World {
                 mprops = MassProperties::new(parry3d::math::Vector::ZERO, 1e-3, parry3d::math::Vector::splat(1e-6));
             }
             let is_root = head == model.root();
-            if is_root && split {
+            if is_root && split && options.base == BaseMode::Free {
                 // The root's mass is shared with its mount, half each, so that the two bodies
                 // welded together weigh what the root weighs.
                 let mut total = mprops;
@@ -382,16 +383,22 @@ impl World {
         // A split root: the multibody hangs from a collider-less mount at the root's pose,
         // welded to the root body by a fixed joint.
         let mount = split.then(|| {
-            let builder = RigidBodyBuilder::dynamic()
-                .additional_mass_properties(mount_mprops)
-                .can_sleep(sleeping)
-                .pose(to_pose(&(pose * link_poses[model.root()])));
+            let free = options.base == BaseMode::Free;
+            let builder = if free {
+                RigidBodyBuilder::dynamic().additional_mass_properties(mount_mprops)
+            } else {
+                RigidBodyBuilder::fixed()
+            }
+            .can_sleep(sleeping)
+            .pose(to_pose(&(pose * link_poses[model.root()])));
             let mount_name = format!("{name}/{}/mount", links[model.root()].name);
             let mount = self.insert_body(&mount_name, builder, []);
-            let weld = FixedJointBuilder::new().contacts_enabled(false);
-            self.state
-                .impulse_joints
-                .insert(body_handles[root_group], mount, weld, true);
+            if free {
+                let weld = FixedJointBuilder::new().contacts_enabled(false);
+                self.state
+                    .impulse_joints
+                    .insert(body_handles[root_group], mount, weld, true);
+            }
             mount
         });
         let all_bodies = || body_handles.iter().copied().chain(mount).collect::<Vec<_>>();
@@ -591,7 +598,7 @@ impl World {
     }
 
     /// The dynamic mount that shares the mass of `body` when `body` is the root body of a model
-    /// whose free root is split off its multibody.
+    /// whose free root is split off its multibody (a fixed root's mount is fixed and massless).
     pub(crate) fn split_mount(&self, handle: ModelHandle, body: BodyId) -> Option<BodyId> {
         let entry = self.state.models.get(handle.index())?;
         let dynamic = self.state.bodies.get(entry.mb_root).is_some_and(|rb| rb.is_dynamic());
@@ -823,16 +830,11 @@ impl World {
 }
 
 /// Whether a model's root is split off its multibody (see [`World::spawn_model`]): objects (no
-/// drive, no gripper) on a free base whose links move.
-///
-/// Fixed bases keep their root in the multibody. Splitting them too saved about a tenth of a
-/// step in the benchmark home (the free roots' split about four tenths), but a mug released
-/// into a fixed counter's sink basin then tipped over (the skills' placement test), its
-/// contacts with the carcass solved on rapier's two-body path instead of the multibody path;
-/// the cause was not isolated further.
+/// drive, no gripper) on a free or fixed base whose links move. Robots, whose bases are
+/// driven through the multibody, keep their root in it.
 fn split_root(model: &RobotModel, base: BaseMode, is_robot: bool) -> bool {
     let moves = model.joints().iter().any(|j| j.kind != JointKind::Fixed);
-    moves && !is_robot && base == BaseMode::Free
+    moves && !is_robot && matches!(base, BaseMode::Free | BaseMode::Fixed)
 }
 
 /// Checks a configuration's length, finiteness and limits.
