@@ -18,6 +18,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use nalgebra::{Isometry3, Point3};
 
+use parry3d::query::ClosestPoints;
+
 use crate::convert::to_pose;
 use crate::model::{JointKind, RobotModel};
 
@@ -69,8 +71,9 @@ pub struct PairTable {
     a: usize,
     b: usize,
     axes: Vec<Axis>,
-    /// Per level, the exact distance between the links at each cell's centre (f32 bits,
-    /// row-major over `axes`; [`UNKNOWN`] until first needed).
+    /// Per level, the exact distance between the links at each cell's centre, or a lower
+    /// bound on it above the level's largest motion bound (f32 bits, row-major over `axes`;
+    /// [`UNKNOWN`] until first needed).
     levels: Vec<Vec<AtomicU32>>,
 }
 
@@ -188,7 +191,7 @@ impl PairTable {
             let Some(cell) = cells.get(index) else { return false };
             let mut bits = cell.load(Ordering::Relaxed);
             if bits == UNKNOWN {
-                bits = self.distance_at(model, k, &at).to_bits();
+                bits = self.clearance_at(model, k, &at).to_bits();
                 cell.store(bits, Ordering::Relaxed);
             }
             if f64::from(f32::from_bits(bits)) > moved {
@@ -198,9 +201,22 @@ impl PairTable {
         false
     }
 
-    /// Exact distance between the links at the centre of the cell `at` of level `level`
-    /// (0 when parry cannot compute it).
-    fn distance_at(&self, model: &RobotModel, level: usize, at: &[usize; 2]) -> f32 {
+    /// The largest motion bound a query in a cell of `level` can have: a clearance above it
+    /// certifies the whole cell.
+    fn cell_motion(&self, level: usize) -> f64 {
+        SLACK
+            + self
+                .axes
+                .iter()
+                .map(|ax| 0.5 * ax.range / (ax.base << level) as f64 * ax.reach)
+                .sum::<f64>()
+    }
+
+    /// Distance between the links at the centre of the cell `at` of level `level`, or a
+    /// value just above the level's largest motion bound (and below the distance) when the
+    /// links are farther apart than that: parry then skips the part pairs that cannot be that
+    /// close. 0 when parry cannot compute it.
+    fn clearance_at(&self, model: &RobotModel, level: usize, at: &[usize; 2]) -> f32 {
         let mut q = model.neutral_configuration();
         for (ax, &k) in self.axes.iter().zip(at) {
             let step = ax.range / (ax.base << level) as f64;
@@ -215,7 +231,12 @@ impl PairTable {
         };
         let pa = to_pose(&sa.origin);
         let pb = to_pose(&(pose * sb.origin));
-        parry3d::query::distance(&pa, sa.shape.as_ref(), &pb, sb.shape.as_ref()).map_or(0.0, |d| d.distance.max(0.0))
+        let enough = (self.cell_motion(level) * 1.01 + 1e-5) as f32;
+        match parry3d::query::closest_points(&pa, sa.shape.as_ref(), &pb, sb.shape.as_ref(), enough) {
+            Ok(ClosestPoints::Disjoint) => enough,
+            Ok(ClosestPoints::WithinMargin(p1, p2)) => (p2 - p1).length().min(enough),
+            Ok(ClosestPoints::Intersecting) | Err(_) => 0.0,
+        }
     }
 }
 
