@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use hearth_kinematics::{Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, links_touch, to_pose};
+use hearth_kinematics::{Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, links_touch, to_pose};
 use nalgebra::{Isometry3, Point3};
 use parry3d::math::Vector;
 use parry3d::shape::{Ball, SharedShape};
@@ -168,6 +168,13 @@ struct BroadPhase {
     /// Balls whose union covers each link (see `RobotModel::link_spheres`): centre in the
     /// link frame and inflated radius. Tested against the obstacles before exact tests.
     cover: Vec<(Point3<f64>, f64)>,
+    /// Per part (same indices as `parts`): its shape and its pose in the link frame, for
+    /// exact tests of single parts.
+    part_shape: Vec<(SharedShape, Isometry3<f64>)>,
+    /// Per part: the balls of its link's cover (bit `k` = the `k`-th ball of the link's
+    /// `cover_range`) that meet it. A part can touch an obstacle only where one of these
+    /// balls does, so the exact test runs only on parts whose balls touched something.
+    part_cover: Vec<u64>,
     /// World centres of `parts` for the current configuration, filled lazily per link.
     parts_world: Vec<Point3<f64>>,
     /// Per link: the value of `epoch` when its `parts_world` were last filled.
@@ -205,6 +212,7 @@ impl BroadPhase {
         let mut parts = Vec::new();
         let mut cover_range = vec![0..0; n];
         let mut cover = Vec::new();
+        let mut part_shape = Vec::new();
         let inflate_f64 = |r: f64| {
             if r.is_finite() {
                 r * (1.0 + BOUND_SLACK_REL) + BOUND_SLACK_ABS
@@ -224,10 +232,12 @@ impl BroadPhase {
                 for (pose, part) in compound.shapes() {
                     let bs = part.compute_bounding_sphere(pose);
                     parts.push((s.origin * p64(bs.center()), inflate(bs.radius())));
+                    part_shape.push((part.clone(), s.origin * from_pose(pose)));
                 }
             } else {
                 let bs = s.shape.compute_local_bounding_sphere();
                 parts.push((s.origin * p64(bs.center()), inflate(bs.radius())));
+                part_shape.push((s.shape.clone(), s.origin));
             }
             part_range[l] = start..parts.len();
             let bs = s.shape.compute_local_bounding_sphere();
@@ -252,9 +262,15 @@ impl BroadPhase {
             })
             .collect();
         let n_parts = parts.len();
+        let part_cover = (0..n)
+            .flat_map(|l| part_range[l].clone().map(move |k| (l, k)))
+            .map(|(l, k)| cover_mask(&cover[cover_range[l].clone()], &part_shape[k]))
+            .collect();
         Self {
             cover_range,
             cover,
+            part_shape,
+            part_cover,
             moving: (0..geometric.len()).filter(|&i| link_moves[i]).collect(),
             batch: BallBatch::new(),
             local_center,
@@ -273,6 +289,25 @@ impl BroadPhase {
             hint: Hint::None,
         }
     }
+}
+
+/// Which balls of a link's `cover` (inflated radii, link frame) meet `part` (shape and pose in
+/// the link frame): all bits when the link has no cover or one of more than 64 balls, and
+/// the ball's bit when parry cannot tell.
+fn cover_mask(cover: &[(Point3<f64>, f64)], part: &(SharedShape, Isometry3<f64>)) -> u64 {
+    if cover.is_empty() || cover.len() > 64 {
+        return u64::MAX;
+    }
+    let part_pose = to_pose(&part.1);
+    cover.iter().enumerate().fold(0, |mask, (k, (c, r))| {
+        // Grown a little more, so that f32 rounding can only add balls.
+        let ball = Ball::new((r * (1.0 + BOUND_SLACK_REL) + BOUND_SLACK_ABS) as f32);
+        let at = to_pose(&Isometry3::translation(c.x, c.y, c.z));
+        let meets = parry3d::query::intersection_test(&at, &ball, &part_pose, part.0.as_ref())
+            .map(|r| r.intersecting)
+            .unwrap_or(true);
+        mask | (u64::from(meets) << k)
+    })
 }
 
 impl RobotValidity {
@@ -372,10 +407,24 @@ impl RobotValidity {
         self.fixed_poses_current
     }
 
+    /// The first obstacle that link `l` touches (exact, part by part).
     fn link_hits(&self, l: usize) -> Option<ObstacleId> {
-        let s = self.model.link_shape(l)?;
-        let pose = to_pose(&(self.poses[l] * s.origin));
-        self.obstacles.first_hit(s.shape.as_ref(), &pose)
+        self.parts_hit(l, u64::MAX)
+    }
+
+    /// The first obstacle that a part of link `l` meeting one of the cover balls in `balls`
+    /// (bits as in `BroadPhase::part_cover`) touches. Every exact link test goes through here,
+    /// so all of them compose part poses the same way and agree to the last bit.
+    fn parts_hit(&self, l: usize, balls: u64) -> Option<ObstacleId> {
+        let b = &self.broad;
+        let pose = &self.poses[l];
+        b.part_range[l].clone().find_map(|k| {
+            if b.part_cover[k] & balls == 0 {
+                return None;
+            }
+            let (shape, at) = &b.part_shape[k];
+            self.obstacles.first_hit(shape.as_ref(), &to_pose(&(pose * at)))
+        })
     }
 
     /// World centres of the links' bounding spheres for the current poses.
@@ -402,24 +451,24 @@ impl RobotValidity {
     }
 
     /// Geometric link number `i`, whose bounding ball touches something: the balls covering
-    /// it (one batch), then the exact test.
+    /// it (one batch), then the exact test of the parts that those of its balls that touch
+    /// meet.
     fn covered_link_blocked(&mut self, i: usize) -> bool {
         let l = self.geometric[i];
         let b = &mut self.broad;
         let range = b.cover_range[l].clone();
-        if !range.is_empty() && b.radius[l].is_finite() {
-            let pose = &self.poses[l];
-            b.batch.clear();
-            for k in range {
-                let c = pose * b.cover[k].0;
-                b.batch
-                    .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
-            }
-            if self.obstacles.balls_touching(&b.batch) == 0 {
-                return false;
-            }
+        if range.is_empty() || !b.radius[l].is_finite() {
+            return self.link_hits(l).is_some();
         }
-        self.link_hits(l).is_some()
+        let pose = &self.poses[l];
+        b.batch.clear();
+        for k in range {
+            let c = pose * b.cover[k].0;
+            b.batch
+                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
+        }
+        let touched = self.obstacles.balls_touching(&b.batch);
+        touched != 0 && self.parts_hit(l, touched).is_some()
     }
 
     /// World centres of link `l`'s part spheres, computed once per check.
