@@ -342,14 +342,10 @@ fn bvh_matches_brute_force_on_random_ball_queries() {
     );
 }
 
-/// The closed-form ball test gives the same answer as parry's, for every primitive (and a
-/// convex hull, which falls back to parry), with and without a margin.
-#[test]
-fn ball_hits_agrees_with_parry() {
-    use parry3d::math::Rotation;
-    use rand::{RngExt, SeedableRng};
+/// One of each primitive (and a convex hull, which falls back to parry), tilted.
+fn primitives() -> Vec<Obstacle> {
     let tilt = Rotation::from_euler(parry3d::glamx::EulerRot::XYZ, 0.3, -0.5, 0.9);
-    let obstacles = vec![
+    vec![
         Obstacle::cuboid(
             "box",
             Pose::from_parts(Vector::new(0.5, 0.0, 0.2), tilt),
@@ -364,7 +360,14 @@ fn ball_hits_agrees_with_parry() {
             &[Vector::ZERO, Vector::X * 0.2, Vector::Y * 0.2, Vector::Z * 0.2],
         )
         .unwrap(),
-    ];
+    ]
+}
+
+/// The closed-form ball test gives the same answer as parry's, for every primitive (and a
+/// convex hull, which falls back to parry), with and without a margin.
+#[test]
+fn ball_hits_agrees_with_parry() {
+    let obstacles = primitives();
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
     let probe = ParryScene::new(obstacles.clone());
     assert!(probe.intersects(&Ball::new(0.05), &Pose::translation(0.5, 0.0, 0.2)));
@@ -392,5 +395,40 @@ fn ball_hits_agrees_with_parry() {
             total += 1;
         }
         assert!(hits > 1000 && total - hits > 1000, "{hits} hits of {total}");
+    }
+}
+
+/// A batch of balls gets, bit for bit, the answers of asking ball by ball (the eight-lane
+/// closed forms of boxes, balls and cylinders against the one-ball forms), with and without a
+/// margin, for batches of every size up to the capacity.
+#[test]
+fn balls_touching_agrees_with_ball_hits() {
+    use hearth_planning::obstacles::BallBatch;
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+    for margin in [0.0, 0.03] {
+        let scene = ParryScene::new(primitives()).with_margin(margin);
+        let mut hits = 0;
+        for round in 0..400 {
+            let n = 1 + round % BallBatch::CAPACITY;
+            let mut batch = BallBatch::new();
+            let mut expected = 0u64;
+            for j in 0..n {
+                let c = Vector::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-0.5..0.8),
+                );
+                let r = rng.random_range(0.001..0.15);
+                assert!(batch.push(c, r));
+                expected |= u64::from(scene.ball_hits(c, r)) << j;
+            }
+            assert_eq!(
+                scene.balls_touching(&batch),
+                expected,
+                "round {round}, {n} balls, margin {margin}"
+            );
+            hits += expected.count_ones();
+        }
+        assert!(hits > 300, "degenerate test: {hits} hits");
     }
 }

@@ -213,9 +213,10 @@ enum Quick {
         center: Vector,
         radius: Real,
     },
-    /// Parry's cylinder: axis y, `±half_height`.
+    /// Parry's cylinder (axis y, `±half_height`) in the world: centre and unit axis.
     Cylinder {
-        pose: Pose,
+        center: Vector,
+        axis: Vector,
         half_height: Real,
         radius: Real,
     },
@@ -226,6 +227,18 @@ enum Quick {
     },
     /// Anything else goes through parry.
     Other,
+}
+
+/// Whether a ball of radius `r` at offset `(dx, dy, dz)` from a cylinder's centre touches the
+/// cylinder (unit `axis`, `±half_height` along it, `radius` around it). The radial part is
+/// measured on the offset with its axial part removed, which stays accurate near the axis.
+#[inline(always)]
+fn cylinder_touches(dx: Real, dy: Real, dz: Real, axis: Vector, half_height: Real, radius: Real, r: Real) -> bool {
+    let along = dx * axis.x + dy * axis.y + dz * axis.z;
+    let (px, py, pz) = (dx - along * axis.x, dy - along * axis.y, dz - along * axis.z);
+    let dr = ((px * px + py * py + pz * pz).sqrt() - radius).max(0.0);
+    let da = (along.abs() - half_height).max(0.0);
+    dr * dr + da * da <= r * r
 }
 
 impl Quick {
@@ -244,7 +257,8 @@ impl Quick {
             }
         } else if let Some(c) = s.as_cylinder() {
             Quick::Cylinder {
-                pose: o.pose,
+                center: o.pose.translation,
+                axis: o.pose.transform_vector(Vector::Y),
                 half_height: c.half_height,
                 radius: c.radius,
             }
@@ -270,15 +284,13 @@ impl Quick {
             }
             Quick::Ball { center: c, radius: r } => (center - *c).length_squared() <= (radius + r) * (radius + r),
             Quick::Cylinder {
-                pose,
+                center: c,
+                axis,
                 half_height,
                 radius: r,
             } => {
-                let p = pose.inverse_transform_point(center);
-                let radial = (p.x * p.x + p.z * p.z).sqrt();
-                let dr = (radial - r).max(0.0);
-                let dy = (p.y.abs() - half_height).max(0.0);
-                dr * dr + dy * dy <= radius * radius
+                let d = center - *c;
+                cylinder_touches(d.x, d.y, d.z, *axis, *half_height, *r, radius)
             }
             Quick::Capsule { a, b, radius: r } => {
                 let ab = *b - *a;
@@ -329,7 +341,15 @@ impl Quick {
                 let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
                 dx * dx + dy * dy + dz * dz <= (r + rc) * (r + rc)
             }),
-            Quick::Cylinder { .. } | Quick::Capsule { .. } => {
+            Quick::Cylinder {
+                center: c,
+                axis,
+                half_height,
+                radius: rc,
+            } => lanes(b, n, margin, |x, y, z, r| {
+                cylinder_touches(x - c.x, y - c.y, z - c.z, axis, half_height, rc, r)
+            }),
+            Quick::Capsule { .. } => {
                 let mut hit = 0u64;
                 for j in 0..n {
                     let (c, r) = b.ball(j);
