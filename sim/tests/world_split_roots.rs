@@ -62,6 +62,18 @@ fn prismatic_variables(world: &World, h: ModelHandle) -> Vec<usize> {
 }
 
 /// Whether any collider of `a` has active contacts with a collider of `b`.
+/// Drives variable `v` of `h` with 20 N (or N·m) of effort for 30 steps; its new position.
+fn push_joint(world: &mut World, h: ModelHandle, v: usize) -> f64 {
+    let name = world.model(h).unwrap().variable_names()[v].clone();
+    world
+        .set_joint_command(h, &name, JointCommand::Effort { value: 20.0 })
+        .unwrap();
+    for _ in 0..30 {
+        world.step();
+    }
+    world.joint_positions(h).unwrap()[v]
+}
+
 fn touching(world: &World, a: BodyId, b: BodyId) -> bool {
     world.narrow_phase().contact_pairs().any(|pair| {
         let parent = |c| world.colliders().get(c).and_then(|co| co.parent());
@@ -131,13 +143,7 @@ fn free_furniture_moves_as_one_and_its_drawers_still_slide() {
     let joint = model.joints().iter().find(|j| j.variable == Some(v)).unwrap().clone();
     let drawer_link = model.links()[joint.child].name.clone();
     let name = model.variable_names()[v].clone();
-    world
-        .set_joint_command(dresser, &name, JointCommand::Effort { value: 20.0 })
-        .unwrap();
-    for _ in 0..30 {
-        world.step();
-    }
-    let q = world.joint_positions(dresser).unwrap()[v];
+    let q = push_joint(&mut world, dresser, v);
     assert!(
         q > 0.5 * model.upper()[v],
         "the drawer slid open to {q} (upper limit {})",
@@ -198,13 +204,7 @@ fn fixed_furniture_hangs_from_a_fixed_mount_and_its_joints_still_move() {
     let v = joint.variable.unwrap();
     let name = model.variable_names()[v].clone();
     let before = world.joint_positions(cabinet).unwrap()[v];
-    world
-        .set_joint_command(cabinet, &name, JointCommand::Effort { value: 20.0 })
-        .unwrap();
-    for _ in 0..30 {
-        world.step();
-    }
-    let q = world.joint_positions(cabinet).unwrap()[v];
+    let q = push_joint(&mut world, cabinet, v);
     assert!(q > before + 0.05, "`{name}` moved from {before} to {q}");
     // The link sits where the joint puts it, relative to the fixed root.
     let base = world.base_pose(cabinet).unwrap();
