@@ -145,6 +145,17 @@ impl WorldObstacles {
 
     fn touches(&self, co: &Collider, shape: &dyn Shape, pose: &Pose) -> bool {
         let pos12 = pose.inv_mul(co.position());
+        // The broad phase's boxes are loosened by rapier's prediction distance, so first the
+        // exact boxes in the collider's frame: apart, they cannot touch, and GJK is not asked
+        // about a small shape near a huge one (the ground), where f32 rounding can report
+        // contact centimetres away.
+        let near = shape
+            .compute_aabb(&pos12.inverse())
+            .loosened(self.margin)
+            .intersects(&co.shape().compute_local_aabb());
+        if !near {
+            return false;
+        }
         let d = self.dispatcher();
         if self.margin > 0.0 {
             return d
