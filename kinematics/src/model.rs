@@ -257,9 +257,9 @@ pub(crate) struct ModelData {
     pub(crate) chains: Vec<ChainSpec>,
     pub(crate) fk: FkProgram,
     pub(crate) fingerprint: u64,
-    /// Per link: a conservative sphere cover of its collision shape, built on first use.
     /// Clearance tables of link pairs, built on first request (`None`: the pair has none).
     pub(crate) pair_tables: std::sync::Mutex<PairTables>,
+    /// Per link: a conservative sphere cover of its collision shape, built on first use.
     pub(crate) sphere_covers: std::sync::OnceLock<Arc<Vec<Vec<crate::spheres::Sphere>>>>,
 }
 

@@ -6,8 +6,9 @@
 //! geometry at all.
 //!
 //! Cells are certified lazily, on the first query that lands in them, and the verdicts are
-//! shared by every user of the model (lock-free atomics), so a planner pays one distance
-//! query per visited cell, once per process.
+//! shared by every user of the model (lock-free atomics), so a planner pays one closest-points
+//! query per visited cell, once per process; the query only looks as far as the cell's level
+//! needs, so part pairs farther apart are skipped.
 //!
 //! The displacement bound: rotating joint `J` by `Δ` moves a point `p` by at most
 //! `|Δ|·|p − o|` for any point `o` on `J`'s axis; translating a prismatic joint by `Δ` moves it
@@ -17,7 +18,6 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use nalgebra::{Isometry3, Point3};
-
 use parry3d::query::ClosestPoints;
 
 use crate::convert::to_pose;

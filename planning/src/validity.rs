@@ -292,10 +292,10 @@ impl BroadPhase {
 }
 
 /// Which balls of a link's `cover` (inflated radii, link frame) meet `part` (shape and pose in
-/// the link frame): all bits when the link has no cover or one of more than 64 balls, and
-/// the ball's bit when parry cannot tell.
+/// the link frame): all bits when the link has no cover or one too big for a [`BallBatch`]
+/// (such links get exact tests only), and the ball's bit when parry cannot tell.
 fn cover_mask(cover: &[(Point3<f64>, f64)], part: &(SharedShape, Isometry3<f64>)) -> u64 {
-    if cover.is_empty() || cover.len() > 64 {
+    if cover.is_empty() || cover.len() > BallBatch::CAPACITY {
         return u64::MAX;
     }
     let part_pose = to_pose(&part.1);
@@ -457,7 +457,7 @@ impl RobotValidity {
         let l = self.geometric[i];
         let b = &mut self.broad;
         let range = b.cover_range[l].clone();
-        if range.is_empty() || !b.radius[l].is_finite() {
+        if range.is_empty() || range.len() > BallBatch::CAPACITY || !b.radius[l].is_finite() {
             return self.link_hits(l).is_some();
         }
         let pose = &self.poses[l];

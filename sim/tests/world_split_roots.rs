@@ -74,6 +74,12 @@ fn push_joint(world: &mut World, h: ModelHandle, v: usize) -> f64 {
     world.joint_positions(h).unwrap()[v]
 }
 
+/// The body holding a model's root link.
+fn root_body(world: &World, h: ModelHandle) -> BodyId {
+    let root = world.model(h).unwrap().links()[0].name.clone();
+    world.link_body(h, &root).unwrap()
+}
+
 fn touching(world: &World, a: BodyId, b: BodyId) -> bool {
     world.narrow_phase().contact_pairs().any(|pair| {
         let parent = |c| world.colliders().get(c).and_then(|co| co.parent());
@@ -113,7 +119,7 @@ fn a_split_model_keeps_its_mass_and_never_touches_itself() {
                 "{name}: {sim_mass} kg simulated, {urdf_mass} kg in the URDF"
             );
         }
-        let root = world.link_body(h, &model.links()[0].name).unwrap();
+        let root = root_body(&world, h);
         for &b in &bodies {
             assert!(
                 !touching(&world, root, b),
@@ -123,8 +129,7 @@ fn a_split_model_keeps_its_mass_and_never_touches_itself() {
     }
     // The crate rests on the dresser's root: a contact the filter keeps.
     let dresser = loaded.object("dresser").unwrap();
-    let model = world.model(dresser).unwrap().clone();
-    let root = world.link_body(dresser, &model.links()[0].name).unwrap();
+    let root = root_body(&world, dresser);
     assert!(touching(&world, root, crate_box), "the crate rests on the dresser");
 }
 
@@ -186,7 +191,7 @@ fn fixed_furniture_hangs_from_a_fixed_mount_and_its_joints_still_move() {
     let (mut world, loaded, _) = furniture();
     let cabinet = loaded.object("cabinet").unwrap();
     let model = world.model(cabinet).unwrap().clone();
-    let root = world.link_body(cabinet, &model.links()[0].name).unwrap();
+    let root = root_body(&world, cabinet);
     let bodies = world.model_bodies(cabinet).unwrap();
     // The root (with colliders) and the collider-less mount are both fixed.
     let fixed: Vec<_> = bodies
@@ -247,8 +252,7 @@ fn mass_randomization_keeps_a_split_root_shared_half_and_half() {
     use rand::SeedableRng;
     let (mut world, loaded, _) = furniture();
     let dresser = loaded.object("dresser").unwrap();
-    let model = world.model(dresser).unwrap().clone();
-    let root = world.link_body(dresser, &model.links()[0].name).unwrap();
+    let root = root_body(&world, dresser);
     // The mount is the one body of the model without colliders.
     let mount = world
         .model_bodies(dresser)

@@ -203,8 +203,9 @@ impl SoaBoxes {
 /// A ball test in closed form: the obstacle's shape in its own frame.
 #[derive(Clone, Debug)]
 enum Quick {
+    /// A box in the world: centre, half extents and its local axes.
     Cuboid {
-        pose: Pose,
+        center: Vector,
         half: Vector,
         /// The box's local axes in the world (rows of the world-to-box rotation).
         axes: [Vector; 3],
@@ -229,6 +230,15 @@ enum Quick {
     Other,
 }
 
+/// Whether a ball of radius `r` at offset `(dx, dy, dz)` from a box's centre touches the box
+/// (local `axes` in the world, `half` extents along them).
+#[inline(always)]
+fn cuboid_touches(dx: Real, dy: Real, dz: Real, axes: &[Vector; 3], half: Vector, r: Real) -> bool {
+    let out = |a: Vector, h: Real| ((dx * a.x + dy * a.y + dz * a.z).abs() - h).max(0.0);
+    let (ox, oy, oz) = (out(axes[0], half.x), out(axes[1], half.y), out(axes[2], half.z));
+    ox * ox + oy * oy + oz * oz <= r * r
+}
+
 /// Whether a ball of radius `r` at offset `(dx, dy, dz)` from a cylinder's centre touches the
 /// cylinder (unit `axis`, `±half_height` along it, `radius` around it). The radial part is
 /// measured on the offset with its axial part removed, which stays accurate near the axis.
@@ -246,7 +256,7 @@ impl Quick {
         let s = &*o.shape;
         if let Some(c) = s.as_cuboid() {
             Quick::Cuboid {
-                pose: o.pose,
+                center: o.pose.translation,
                 half: c.half_extents,
                 axes: [Vector::X, Vector::Y, Vector::Z].map(|a| o.pose.transform_vector(a)),
             }
@@ -277,10 +287,9 @@ impl Quick {
     #[inline]
     fn ball(&self, center: Vector, radius: Real) -> Option<bool> {
         Some(match self {
-            Quick::Cuboid { pose, half, .. } => {
-                let p = pose.inverse_transform_point(center);
-                let d = (p.abs() - *half).max(Vector::ZERO);
-                d.length_squared() <= radius * radius
+            Quick::Cuboid { center: c, half, axes } => {
+                let d = center - *c;
+                cuboid_touches(d.x, d.y, d.z, axes, *half, radius)
             }
             Quick::Ball { center: c, radius: r } => (center - *c).length_squared() <= (radius + r) * (radius + r),
             Quick::Cylinder {
@@ -305,9 +314,7 @@ impl Quick {
             Quick::Other => return None,
         })
     }
-}
 
-impl Quick {
     /// Bits of the balls `0..n` of `b` (radii grown by `margin`) this obstacle touches, eight
     /// balls per step; `None` when parry must decide. Bits at and above `n` are garbage.
     #[inline]
@@ -328,15 +335,9 @@ impl Quick {
             hit
         }
         Some(match *self {
-            Quick::Cuboid { pose, half, axes } => {
-                let t = pose.translation;
-                lanes(b, n, margin, |x, y, z, r| {
-                    let (dx, dy, dz) = (x - t.x, y - t.y, z - t.z);
-                    let out = |a: Vector, h: Real| ((dx * a.x + dy * a.y + dz * a.z).abs() - h).max(0.0);
-                    let (ox, oy, oz) = (out(axes[0], half.x), out(axes[1], half.y), out(axes[2], half.z));
-                    ox * ox + oy * oy + oz * oz <= r * r
-                })
-            }
+            Quick::Cuboid { center: c, half, axes } => lanes(b, n, margin, |x, y, z, r| {
+                cuboid_touches(x - c.x, y - c.y, z - c.z, &axes, half, r)
+            }),
             Quick::Ball { center: c, radius: rc } => lanes(b, n, margin, |x, y, z, r| {
                 let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
                 dx * dx + dy * dy + dz * dz <= (r + rc) * (r + rc)

@@ -314,7 +314,9 @@ impl World {
         let root_group = group[model.root()].0;
         let split =
             self.config.split_roots && split_root(model, options.base, diff_drive.is_some() || gripper.is_some());
-        // Half of a free split root's mass properties (a fixed mount has none): the root body's and the mount's.
+        // A free split root's mount is dynamic, welded to the root body, and shares its mass.
+        let free_split = split && options.base == BaseMode::Free;
+        // Half of a free split root's mass properties: the root body's and the mount's.
         let mut mount_mprops = MassProperties::default();
         let mut body_handles = Vec::with_capacity(group_heads.len());
         for (g, &head) in group_heads.iter().enumerate() {
@@ -350,7 +352,7 @@ impl World {
                 mprops = MassProperties::new(parry3d::math::Vector::ZERO, 1e-3, parry3d::math::Vector::splat(1e-6));
             }
             let is_root = head == model.root();
-            if is_root && split && options.base == BaseMode::Free {
+            if is_root && free_split {
                 // The root's mass is shared with its mount, half each, so that the two bodies
                 // welded together weigh what the root weighs.
                 let mut total = mprops;
@@ -381,10 +383,9 @@ impl World {
         }
 
         // A split root: the multibody hangs from a collider-less mount at the root's pose,
-        // welded to the root body by a fixed joint.
+        // welded to the root body by a fixed joint on a free base, fixed like it otherwise.
         let mount = split.then(|| {
-            let free = options.base == BaseMode::Free;
-            let builder = if free {
+            let builder = if free_split {
                 RigidBodyBuilder::dynamic().additional_mass_properties(mount_mprops)
             } else {
                 RigidBodyBuilder::fixed()
@@ -393,7 +394,7 @@ impl World {
             .pose(to_pose(&(pose * link_poses[model.root()])));
             let mount_name = format!("{name}/{}/mount", links[model.root()].name);
             let mount = self.insert_body(&mount_name, builder, []);
-            if free {
+            if free_split {
                 let weld = FixedJointBuilder::new().contacts_enabled(false);
                 self.state
                     .impulse_joints
