@@ -308,6 +308,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     }
                     Ok(sol) => {
                         row["plan_time_s"] = json!(sol.stats.time.as_secs_f64());
+                        row["plan_checks"] = json!(sol.stats.states_checked);
+                        row["iterations"] = json!(sol.stats.iterations);
                         let fine_resolution = a.resolution / 10.0;
                         let settings = ShortcutSettings {
                             attempts: a.shortcut_attempts,

@@ -6,6 +6,10 @@ use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::{self, Ray};
 use parry3d::shape::Shape;
 
+use std::ops::{Add, Mul, Sub};
+
+use wide::f32x8;
+
 use super::{BallBatch, Obstacle, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
 
 /// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
@@ -230,25 +234,86 @@ enum Quick {
     Other,
 }
 
-/// Whether a ball of radius `r` at offset `(dx, dy, dz)` from a box's centre touches the box
-/// (local `axes` in the world, `half` extents along them).
-#[inline(always)]
-fn cuboid_touches(dx: Real, dy: Real, dz: Real, axes: &[Vector; 3], half: Vector, r: Real) -> bool {
-    let out = |a: Vector, h: Real| ((dx * a.x + dy * a.y + dz * a.z).abs() - h).max(0.0);
-    let (ox, oy, oz) = (out(axes[0], half.x), out(axes[1], half.y), out(axes[2], half.z));
-    ox * ox + oy * oy + oz * oz <= r * r
+/// The arithmetic the closed forms below need, on one value (`f32`) or on eight lanes
+/// (`f32x8`), so that a ball asked alone and a ball asked in a batch get the same answer to
+/// the last bit.
+trait Lane: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
+    fn splat(v: Real) -> Self;
+    fn abs(self) -> Self;
+    fn max0(self) -> Self;
+    fn sqrt(self) -> Self;
 }
 
-/// Whether a ball of radius `r` at offset `(dx, dy, dz)` from a cylinder's centre touches the
+impl Lane for Real {
+    #[inline(always)]
+    fn splat(v: Real) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Real::abs(self)
+    }
+    #[inline(always)]
+    fn max0(self) -> Self {
+        self.max(0.0)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Real::sqrt(self)
+    }
+}
+
+impl Lane for f32x8 {
+    #[inline(always)]
+    fn splat(v: Real) -> Self {
+        f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn max0(self) -> Self {
+        self.max(f32x8::ZERO)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32x8::sqrt(self)
+    }
+}
+
+/// Squared distance from the point at offset `(dx, dy, dz)` from a box's centre to the box
+/// (local `axes` in the world, `half` extents along them).
+#[inline(always)]
+fn cuboid_gap2<L: Lane>(dx: L, dy: L, dz: L, axes: &[Vector; 3], half: Vector) -> L {
+    let out = |a: Vector, h: Real| (dx * L::splat(a.x) + dy * L::splat(a.y) + dz * L::splat(a.z)).abs() - L::splat(h);
+    let (ox, oy, oz) = (
+        out(axes[0], half.x).max0(),
+        out(axes[1], half.y).max0(),
+        out(axes[2], half.z).max0(),
+    );
+    ox * ox + oy * oy + oz * oz
+}
+
+/// Squared distance from the point at offset `(dx, dy, dz)` from a cylinder's centre to the
 /// cylinder (unit `axis`, `±half_height` along it, `radius` around it). The radial part is
 /// measured on the offset with its axial part removed, which stays accurate near the axis.
 #[inline(always)]
-fn cylinder_touches(dx: Real, dy: Real, dz: Real, axis: Vector, half_height: Real, radius: Real, r: Real) -> bool {
-    let along = dx * axis.x + dy * axis.y + dz * axis.z;
-    let (px, py, pz) = (dx - along * axis.x, dy - along * axis.y, dz - along * axis.z);
-    let dr = ((px * px + py * py + pz * pz).sqrt() - radius).max(0.0);
-    let da = (along.abs() - half_height).max(0.0);
-    dr * dr + da * da <= r * r
+fn cylinder_gap2<L: Lane>(dx: L, dy: L, dz: L, axis: Vector, half_height: Real, radius: Real) -> L {
+    let (ax, ay, az) = (L::splat(axis.x), L::splat(axis.y), L::splat(axis.z));
+    let along = dx * ax + dy * ay + dz * az;
+    let (px, py, pz) = (dx - along * ax, dy - along * ay, dz - along * az);
+    let dr = ((px * px + py * py + pz * pz).sqrt() - L::splat(radius)).max0();
+    let da = (along.abs() - L::splat(half_height)).max0();
+    dr * dr + da * da
+}
+
+/// Squared distance between the centres of two balls, and the square of the largest one at
+/// which they touch (`r + rc`).
+#[inline(always)]
+fn balls_gap2<L: Lane>(dx: L, dy: L, dz: L, rc: Real, r: L) -> (L, L) {
+    let reach = r + L::splat(rc);
+    (dx * dx + dy * dy + dz * dz, reach * reach)
 }
 
 impl Quick {
@@ -289,9 +354,13 @@ impl Quick {
         Some(match self {
             Quick::Cuboid { center: c, half, axes } => {
                 let d = center - *c;
-                cuboid_touches(d.x, d.y, d.z, axes, *half, radius)
+                cuboid_gap2(d.x, d.y, d.z, axes, *half) <= radius * radius
             }
-            Quick::Ball { center: c, radius: r } => (center - *c).length_squared() <= (radius + r) * (radius + r),
+            Quick::Ball { center: c, radius: r } => {
+                let d = center - *c;
+                let (d2, reach2) = balls_gap2(d.x, d.y, d.z, *r, radius);
+                d2 <= reach2
+            }
             Quick::Cylinder {
                 center: c,
                 axis,
@@ -299,7 +368,7 @@ impl Quick {
                 radius: r,
             } => {
                 let d = center - *c;
-                cylinder_touches(d.x, d.y, d.z, *axis, *half_height, *r, radius)
+                cylinder_gap2(d.x, d.y, d.z, *axis, *half_height, *r) <= radius * radius
             }
             Quick::Capsule { a, b, radius: r } => {
                 let ab = *b - *a;
@@ -319,37 +388,49 @@ impl Quick {
     /// balls per step; `None` when parry must decide. Bits at and above `n` are garbage.
     #[inline]
     fn balls(&self, b: &BallBatch, n: usize, margin: Real) -> Option<u64> {
-        /// Runs `touch(x, y, z, r)` on every lane, eight at a time.
+        /// Bits of the lanes where `touch(x, y, z, r)` holds, eight balls per step.
         #[inline(always)]
-        fn lanes(b: &BallBatch, n: usize, margin: Real, touch: impl Fn(Real, Real, Real, Real) -> bool) -> u64 {
+        fn lanes(b: &BallBatch, n: usize, margin: Real, touch: impl Fn(f32x8, f32x8, f32x8, f32x8) -> f32x8) -> u64 {
+            let load = |v: &[Real; BallBatch::CAPACITY], o: usize| {
+                let mut lane = [0.0; 8];
+                lane.copy_from_slice(&v[o..o + 8]);
+                f32x8::new(lane)
+            };
+            let margin = f32x8::splat(margin);
             let mut hit = 0u64;
             for chunk in 0..n.div_ceil(8) {
                 let o = chunk * 8;
-                let mut m = 0u64;
-                for k in 0..8 {
-                    let j = o + k;
-                    m |= u64::from(touch(b.x[j], b.y[j], b.z[j], b.r[j] + margin)) << k;
-                }
-                hit |= m << o;
+                let m = touch(load(&b.x, o), load(&b.y, o), load(&b.z, o), load(&b.r, o) + margin);
+                hit |= u64::from(m.to_bitmask()) << o;
             }
             hit
         }
+        let at = |c: Vector| (f32x8::splat(c.x), f32x8::splat(c.y), f32x8::splat(c.z));
         Some(match *self {
-            Quick::Cuboid { center: c, half, axes } => lanes(b, n, margin, |x, y, z, r| {
-                cuboid_touches(x - c.x, y - c.y, z - c.z, &axes, half, r)
-            }),
-            Quick::Ball { center: c, radius: rc } => lanes(b, n, margin, |x, y, z, r| {
-                let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
-                dx * dx + dy * dy + dz * dz <= (r + rc) * (r + rc)
-            }),
+            Quick::Cuboid { center, half, axes } => {
+                let (cx, cy, cz) = at(center);
+                lanes(b, n, margin, |x, y, z, r| {
+                    cuboid_gap2(x - cx, y - cy, z - cz, &axes, half).simd_le(r * r)
+                })
+            }
+            Quick::Ball { center, radius: rc } => {
+                let (cx, cy, cz) = at(center);
+                lanes(b, n, margin, |x, y, z, r| {
+                    let (d2, reach2) = balls_gap2(x - cx, y - cy, z - cz, rc, r);
+                    d2.simd_le(reach2)
+                })
+            }
             Quick::Cylinder {
-                center: c,
+                center,
                 axis,
                 half_height,
                 radius: rc,
-            } => lanes(b, n, margin, |x, y, z, r| {
-                cylinder_touches(x - c.x, y - c.y, z - c.z, axis, half_height, rc, r)
-            }),
+            } => {
+                let (cx, cy, cz) = at(center);
+                lanes(b, n, margin, |x, y, z, r| {
+                    cylinder_gap2(x - cx, y - cy, z - cz, axis, half_height, rc).simd_le(r * r)
+                })
+            }
             Quick::Capsule { .. } => {
                 let mut hit = 0u64;
                 for j in 0..n {
