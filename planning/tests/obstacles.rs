@@ -432,3 +432,71 @@ fn balls_touching_agrees_with_ball_hits() {
         assert!(hits > 300, "degenerate test: {hits} hits");
     }
 }
+
+/// `first_hit` (which answers small scenes by a scan with closed forms for balls and the
+/// box-box separating-axis test) agrees with parry's own test of every obstacle, for box,
+/// ball and cylinder probes at random poses. Answers may differ only within a hair of contact,
+/// where f32 rounding (and parry's own GJK tolerance, ~1e-4 m) decides either way.
+#[test]
+fn first_hit_agrees_with_parry_per_obstacle() {
+    use parry3d::shape::{Cylinder, Shape};
+    let obstacles = primitives();
+    let scene = ParryScene::new(obstacles.clone());
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(23);
+    let probes: [Box<dyn Shape>; 4] = [
+        Box::new(Cuboid::new(Vector::new(0.1, 0.03, 0.05))),
+        Box::new(Cuboid::new(Vector::new(0.004, 0.2, 0.02))),
+        Box::new(Ball::new(0.07)),
+        Box::new(Cylinder::new(0.06, 0.04)),
+    ];
+    let (mut hits, mut near_contact) = (0, 0);
+    for round in 0..40_000 {
+        let probe = &probes[round % probes.len()];
+        let rotation = Rotation::from_euler(
+            parry3d::glamx::EulerRot::XYZ,
+            rng.random_range(-3.2..3.2),
+            rng.random_range(-3.2..3.2),
+            rng.random_range(-3.2..3.2),
+        );
+        let pose = Pose::from_parts(
+            Vector::new(
+                rng.random_range(-0.8..0.8),
+                rng.random_range(-0.8..0.8),
+                rng.random_range(-0.3..0.7),
+            ),
+            rotation,
+        );
+        let parry_hit = obstacles.iter().position(|o| {
+            query::intersection_test(&pose, probe.as_ref(), &o.pose, o.shape.as_ref())
+                .unwrap()
+                .intersecting
+        });
+        let ours = scene.first_hit(probe.as_ref(), &pose);
+        assert_eq!(ours.is_some(), scene.intersects(probe.as_ref(), &pose));
+        if ours.is_some() != parry_hit.is_some() {
+            let gap = obstacles
+                .iter()
+                .map(|o| {
+                    query::distance(&pose, probe.as_ref(), &o.pose, o.shape.as_ref())
+                        .unwrap()
+                        .distance
+                })
+                .fold(Real::MAX, Real::min);
+            assert!(
+                gap < 1e-4,
+                "round {round}: ours {ours:?}, parry {parry_hit:?}, gap {gap}"
+            );
+            near_contact += 1;
+        }
+        if let Some(id) = ours {
+            let o = &obstacles[id.index()];
+            let d = query::distance(&pose, probe.as_ref(), &o.pose, o.shape.as_ref())
+                .unwrap()
+                .distance;
+            assert!(d < 1e-4, "round {round}: reported obstacle {id:?} is {d} away");
+            hits += 1;
+        }
+    }
+    assert!(hits > 2000 && hits < 38_000, "degenerate test: {hits} hits");
+    assert!(near_contact < 10, "{near_contact} answers differ from parry's");
+}

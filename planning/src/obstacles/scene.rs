@@ -143,6 +143,35 @@ impl ParryScene {
     }
 }
 
+impl ParryScene {
+    /// [`Obstacles::first_hit`] for small scenes without a margin: a scan of the bounding
+    /// boxes, closed forms for a ball (against every obstacle kind but meshes) and for a box
+    /// against a box, parry for the rest.
+    fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
+        if let Some(ball) = shape.as_ball() {
+            let (c, r) = (pose.translation, ball.radius);
+            return self.boxes.first_near(c, r, |i| {
+                self.quick[i]
+                    .ball(c, r)
+                    .unwrap_or_else(|| self.touches(i as u32, shape, pose))
+            });
+        }
+        if let Some(cuboid) = shape.as_cuboid() {
+            let obb = Obb::at(pose, cuboid.half_extents);
+            return self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
+                Quick::Cuboid { center, half, axes } => obb.touches(&Obb {
+                    center: *center,
+                    axes: *axes,
+                    half: *half,
+                }),
+                _ => self.touches(i as u32, shape, pose),
+            });
+        }
+        self.boxes
+            .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose))
+    }
+}
+
 impl FromIterator<Obstacle> for ParryScene {
     fn from_iter<I: IntoIterator<Item = Obstacle>>(iter: I) -> Self {
         Self::new(iter.into_iter().collect())
@@ -176,33 +205,134 @@ impl SoaBoxes {
         }
     }
 
-    /// Whether `exact(i)` holds for some box `i` within `r` of `c` (boxes checked eight at a
-    /// time, `exact` only on those close enough).
-    #[inline]
-    fn any_near(&self, c: Vector, r: Real, mut exact: impl FnMut(usize) -> bool) -> bool {
-        let [x0, y0, z0, x1, y1, z1] = &self.bounds;
-        let r2 = r * r;
-        for chunk in 0..x0.len() / 8 {
+    /// The first box `i` (in index order) for which `near(lanes)` marks the lane and
+    /// `exact(i)` holds; `near` sees eight boxes at a time as `[min x, min y, min z, max x,
+    /// max y, max z]` lanes and returns a lane mask.
+    #[inline(always)]
+    fn scan(&self, near: impl Fn([f32x8; 6]) -> f32x8, mut exact: impl FnMut(usize) -> bool) -> Option<usize> {
+        for chunk in 0..self.bounds[0].len() / 8 {
             let base = chunk * 8;
-            let mut mask = 0u32;
-            for k in 0..8 {
-                let i = base + k;
-                let dx = (x0[i] - c.x).max(c.x - x1[i]).max(0.0);
-                let dy = (y0[i] - c.y).max(c.y - y1[i]).max(0.0);
-                let dz = (z0[i] - c.z).max(c.z - z1[i]).max(0.0);
-                mask |= u32::from(dx * dx + dy * dy + dz * dz <= r2) << k;
-            }
+            let lanes = self.bounds.each_ref().map(|v| {
+                let mut lane = [0.0; 8];
+                lane.copy_from_slice(&v[base..base + 8]);
+                f32x8::new(lane)
+            });
+            let mut mask = near(lanes).to_bitmask();
             while mask != 0 {
                 let i = base + mask.trailing_zeros() as usize;
                 if i < self.len && exact(i) {
-                    return true;
+                    return Some(i);
                 }
                 mask &= mask - 1;
             }
         }
-        false
+        None
+    }
+
+    /// The first box `i` within `r` of `c` for which `exact(i)` holds.
+    #[inline]
+    fn first_near(&self, c: Vector, r: Real, exact: impl FnMut(usize) -> bool) -> Option<usize> {
+        let (x, y, z) = (f32x8::splat(c.x), f32x8::splat(c.y), f32x8::splat(c.z));
+        let r2 = f32x8::splat(r * r);
+        self.scan(
+            |[x0, y0, z0, x1, y1, z1]| {
+                let dx = (x0 - x).max(x - x1).max0();
+                let dy = (y0 - y).max(y - y1).max0();
+                let dz = (z0 - z).max(z - z1).max0();
+                (dx * dx + dy * dy + dz * dz).simd_le(r2)
+            },
+            exact,
+        )
+    }
+
+    /// The first box `i` overlapping `aabb` for which `exact(i)` holds.
+    #[inline]
+    fn first_overlapping(&self, aabb: &Aabb, exact: impl FnMut(usize) -> bool) -> Option<usize> {
+        let lo = aabb.mins.to_array().map(f32x8::splat);
+        let hi = aabb.maxs.to_array().map(f32x8::splat);
+        self.scan(
+            |[x0, y0, z0, x1, y1, z1]| {
+                x0.simd_le(hi[0])
+                    & y0.simd_le(hi[1])
+                    & z0.simd_le(hi[2])
+                    & lo[0].simd_le(x1)
+                    & lo[1].simd_le(y1)
+                    & lo[2].simd_le(z1)
+            },
+            exact,
+        )
     }
 }
+
+/// An oriented box: centre, local axes in the world and half extents along them.
+#[derive(Clone, Copy, Debug)]
+struct Obb {
+    center: Vector,
+    axes: [Vector; 3],
+    half: Vector,
+}
+
+impl Obb {
+    fn at(pose: &Pose, half: Vector) -> Self {
+        Self {
+            center: pose.translation,
+            axes: [Vector::X, Vector::Y, Vector::Z].map(|a| pose.rotation * a),
+            half,
+        }
+    }
+
+    /// The world-aligned box around it.
+    fn aabb(&self) -> Aabb {
+        let [a, b, c] = self.axes;
+        let h = self.half;
+        let extent = a.abs() * h.x + b.abs() * h.y + c.abs() * h.z;
+        Aabb::new(self.center - extent, self.center + extent)
+    }
+
+    /// Whether the two boxes touch: the separating-axis test on their 15 candidate axes
+    /// (Gottschalk, Lin & Manocha 1996; the form of Ericson, *Real-Time Collision Detection*,
+    /// §4.4.1). [`OBB_PARALLEL_SLACK`] on every rotation term keeps near-parallel edge pairs,
+    /// whose cross product is numerically meaningless, from reporting a false separation; it
+    /// only ever reports contact, never clearance.
+    fn touches(&self, other: &Obb) -> bool {
+        let (a, b) = (self, other);
+        let ha = a.half.to_array();
+        let hb = b.half.to_array();
+        let d = b.center - a.center;
+        let t = a.axes.map(|ax| ax.dot(d));
+        let r: [[Real; 3]; 3] = a.axes.map(|ai| b.axes.map(|bj| ai.dot(bj)));
+        let abs_r = r.map(|row| row.map(|v| v.abs() + OBB_PARALLEL_SLACK));
+        for i in 0..3 {
+            let rb = hb[0] * abs_r[i][0] + hb[1] * abs_r[i][1] + hb[2] * abs_r[i][2];
+            if t[i].abs() > ha[i] + rb {
+                return false;
+            }
+        }
+        for j in 0..3 {
+            let ra = ha[0] * abs_r[0][j] + ha[1] * abs_r[1][j] + ha[2] * abs_r[2][j];
+            let s = t[0] * r[0][j] + t[1] * r[1][j] + t[2] * r[2][j];
+            if s.abs() > ra + hb[j] {
+                return false;
+            }
+        }
+        for i in 0..3 {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            for j in 0..3 {
+                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+                let ra = ha[i1] * abs_r[i2][j] + ha[i2] * abs_r[i1][j];
+                let rb = hb[j1] * abs_r[i][j2] + hb[j2] * abs_r[i][j1];
+                let s = t[i2] * r[i1][j] - t[i1] * r[i2][j];
+                if s.abs() > ra + rb {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Added to every absolute rotation term of the box-box test (see [`Obb::touches`]).
+const OBB_PARALLEL_SLACK: Real = 1e-6;
 
 /// A ball test in closed form: the obstacle's shape in its own frame.
 #[derive(Clone, Debug)]
@@ -496,6 +626,9 @@ impl Obstacles for ParryScene {
         if self.obstacles.is_empty() {
             return None;
         }
+        if self.quick.len() <= SCAN_LIMIT && self.margin == 0.0 && pose.is_finite() {
+            return self.scan_first_hit(shape, pose).map(|i| ObstacleId(i as u32));
+        }
         let query_box = shape.compute_aabb(pose).loosened(self.margin);
         self.bvh
             .intersect_aabb(&query_box)
@@ -510,11 +643,14 @@ impl Obstacles for ParryScene {
         }
         if self.quick.len() <= SCAN_LIMIT {
             let ball = || parry3d::shape::Ball::new(radius);
-            return self.boxes.any_near(center, r, |i| {
-                self.quick[i]
-                    .ball(center, r)
-                    .unwrap_or_else(|| self.touches(i as u32, &ball(), &Pose::from_translation(center)))
-            });
+            return self
+                .boxes
+                .first_near(center, r, |i| {
+                    self.quick[i]
+                        .ball(center, r)
+                        .unwrap_or_else(|| self.touches(i as u32, &ball(), &Pose::from_translation(center)))
+                })
+                .is_some();
         }
         let query_box = Aabb::new(center - Vector::splat(r), center + Vector::splat(r));
         self.bvh.intersect_aabb(&query_box).any(|i| {
