@@ -212,12 +212,13 @@ impl SoaBoxes {
     fn scan(&self, near: impl Fn([f32x8; 6]) -> f32x8, mut exact: impl FnMut(usize) -> bool) -> Option<usize> {
         for chunk in 0..self.bounds[0].len() / 8 {
             let base = chunk * 8;
-            let lanes = self.bounds.each_ref().map(|v| {
+            let b = &self.bounds;
+            let load = |k: usize| {
                 let mut lane = [0.0; 8];
-                lane.copy_from_slice(&v[base..base + 8]);
+                lane.copy_from_slice(&b[k][base..base + 8]);
                 f32x8::new(lane)
-            });
-            let mut mask = near(lanes).to_bitmask();
+            };
+            let mut mask = near([load(0), load(1), load(2), load(3), load(4), load(5)]).to_bitmask();
             while mask != 0 {
                 let i = base + mask.trailing_zeros() as usize;
                 if i < self.len && exact(i) {
@@ -248,8 +249,9 @@ impl SoaBoxes {
     /// The first box `i` overlapping `aabb` for which `exact(i)` holds.
     #[inline]
     fn first_overlapping(&self, aabb: &Aabb, exact: impl FnMut(usize) -> bool) -> Option<usize> {
-        let lo = aabb.mins.to_array().map(f32x8::splat);
-        let hi = aabb.maxs.to_array().map(f32x8::splat);
+        let (lo, hi) = (aabb.mins, aabb.maxs);
+        let lo = [f32x8::splat(lo.x), f32x8::splat(lo.y), f32x8::splat(lo.z)];
+        let hi = [f32x8::splat(hi.x), f32x8::splat(hi.y), f32x8::splat(hi.z)];
         self.scan(
             |[x0, y0, z0, x1, y1, z1]| {
                 x0.simd_le(hi[0])
@@ -276,7 +278,7 @@ impl Obb {
     fn at(pose: &Pose, half: Vector) -> Self {
         Self {
             center: pose.translation,
-            axes: [Vector::X, Vector::Y, Vector::Z].map(|a| pose.rotation * a),
+            axes: [pose.rotation * Vector::X, pose.rotation * Vector::Y, pose.rotation * Vector::Z],
             half,
         }
     }
@@ -299,9 +301,15 @@ impl Obb {
         let ha = a.half.to_array();
         let hb = b.half.to_array();
         let d = b.center - a.center;
-        let t = a.axes.map(|ax| ax.dot(d));
-        let r: [[Real; 3]; 3] = a.axes.map(|ai| b.axes.map(|bj| ai.dot(bj)));
-        let abs_r = r.map(|row| row.map(|v| v.abs() + OBB_PARALLEL_SLACK));
+        let t = [a.axes[0].dot(d), a.axes[1].dot(d), a.axes[2].dot(d)];
+        let mut r = [[0.0; 3]; 3];
+        let mut abs_r = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                r[i][j] = a.axes[i].dot(b.axes[j]);
+                abs_r[i][j] = r[i][j].abs() + OBB_PARALLEL_SLACK;
+            }
+        }
         for i in 0..3 {
             let rb = hb[0] * abs_r[i][0] + hb[1] * abs_r[i][1] + hb[2] * abs_r[i][2];
             if t[i].abs() > ha[i] + rb {
