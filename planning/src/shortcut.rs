@@ -44,8 +44,9 @@ use crate::validity::StateValidator;
 /// Parabolic shortcut attempts between fine checks.
 const ROUND: usize = 10;
 
-/// Repairs at ever finer spacing tried when a fallback motion fails the verification check.
-const VERIFY_ROUNDS: usize = 4;
+/// Edges re-planned around a missed graze (see [`smooth`]) before a fallback motion that still
+/// fails the verification check is given up.
+const VERIFY_ROUNDS: usize = 8;
 
 /// How long to shortcut and how carefully.
 #[derive(Clone, Debug, PartialEq)]
@@ -346,7 +347,7 @@ pub struct Smoothed {
     pub parabolic: ShortcutStats,
     /// Whether the shortcut trajectory failed the check at
     /// [`ShortcutSettings::verify_resolution`] and an unshortcut rest-to-rest timing (of the
-    /// repaired path, or of that path repaired again more finely), which passed it, was
+    /// repaired path, or of that path with edges re-planned around missed grazes), which passed it, was
     /// returned instead.
     pub fell_back: bool,
 }
@@ -358,8 +359,9 @@ pub struct Smoothed {
 /// checked at both resolutions. With `settings.verify_resolution`, the finished trajectory is
 /// checked once more at that resolution; when the shortcut one fails (a graze between the
 /// samples of the earlier checks) the rest-to-rest timing of the repaired path is returned if
-/// it passes, else that of the path repaired at half, a quarter, … of the verification spacing
-/// (within what is left of `repair_budget`), and [`PlanError::InvalidMotion`] if none passes.
+/// it passes; if it fails too, the edge holding the colliding state is re-planned around that
+/// state, a few times (within what is left of `repair_budget`), and [`PlanError::InvalidMotion`]
+/// is returned if no such motion passes.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -399,7 +401,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 ) -> Result<Smoothed, PlanError> {
     let started = std::time::Instant::now();
     let space = motion.space().clone();
-    let bad = |e: TrajectoryError| PlanError::BadInput(e.to_string());
+    let bad_input = |e: TrajectoryError| PlanError::BadInput(e.to_string());
     // Random shortcuts at the coarse resolution, then one fine pass over what is left.
     let mut current = path.clone();
     let mut out_random = ShortcutStats::default();
@@ -416,43 +418,45 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         Some(r) => repair(&space, validator, &current, r, repair_budget, rng)?,
         None => (current, 0),
     };
-    let rest_to_rest = Trajectory::rest_to_rest(&space, &repaired_path, limits).map_err(bad)?;
+    let rest_to_rest = Trajectory::rest_to_rest(&space, &repaired_path, limits).map_err(bad_input)?;
     let mut trajectory = rest_to_rest.clone();
     let mut current = repaired_path.clone();
     let mut out_parabolic = ShortcutStats::default();
     if smoothing == Smoothing::Parabolic {
-        out_parabolic = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad)?;
+        out_parabolic = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad_input)?;
         current = trajectory.to_path(&space, motion.resolution());
     }
     let mut fell_back = false;
     if let Some(r) = settings.verify_resolution
         && trajectory.check(&space, validator, r).is_err()
     {
-        // Fall back to the unshortcut timing of the repaired path. A path pulled taut by
-        // shortcuts can slide along a surface, where samples at one spacing pass and samples
-        // at another graze; so if the fallback fails too, repair it at half the spacing and
-        // try again (a few times). Whatever is returned has passed the very check the caller
-        // re-runs.
+        // Fall back to the unshortcut timing of the repaired path. Its edges passed at the
+        // fine spacing, but a path can graze a surface so thinly that samples at one spacing
+        // pass and samples at another hit it; then the edge holding the state that failed is
+        // re-planned around that state (a few times). Whatever is returned has passed the very
+        // check the caller re-runs.
         fell_back = true;
         let (mut candidate, mut candidate_path) = (rest_to_rest, repaired_path);
-        let mut spacing = r;
         let mut verified = false;
+        let mut bad = vec![0.0; space.dim()];
         for _ in 0..VERIFY_ROUNDS {
-            let failure = match candidate.check(&space, validator, r) {
+            let time = match candidate.check(&space, validator, r) {
                 Ok(()) => {
                     verified = true;
                     break;
                 }
-                Err(e) => e,
+                Err(TrajectoryError::InCollision { time }) => time,
+                Err(e) => return Err(invalid_motion(e)),
             };
-            spacing /= 2.0;
+            candidate.sample(time, &mut bad, None);
             let left = repair_budget.saturating_sub(started.elapsed());
-            match repair(&space, validator, &candidate_path, spacing, left, rng) {
-                Ok((p, _)) => {
-                    candidate = Trajectory::rest_to_rest(&space, &p, limits).map_err(bad)?;
+            let edge = candidate.span_at(time);
+            match detour(&space, validator, &candidate_path, edge, &bad, r, left, rng) {
+                Ok(p) => {
+                    candidate = Trajectory::rest_to_rest(&space, &p, limits).map_err(bad_input)?;
                     candidate_path = p;
                 }
-                Err(_) => return Err(invalid_motion(failure)),
+                Err(_) => return Err(PlanError::InvalidMotion { time }),
             }
         }
         if !verified {
@@ -469,6 +473,74 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         parabolic: out_parabolic,
         fell_back,
     })
+}
+
+/// Rejects states within `radius` of `avoid` (in the space's distance), on top of `inner`.
+struct Avoiding<'a, S, V: ?Sized> {
+    space: &'a S,
+    inner: &'a mut V,
+    avoid: &'a [f64],
+    radius: f64,
+}
+
+impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V> {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.space.distance(q, self.avoid) > self.radius && self.inner.is_valid(q)
+    }
+
+    fn checks(&self) -> u64 {
+        self.inner.checks()
+    }
+}
+
+/// `path` with edge `edge` (from state `edge` to `edge + 1`) re-planned at `resolution` around
+/// `bad`, a colliding state on it that the edge's samples missed: states within two spacings
+/// of `bad` count as invalid, so the new edges keep clear of where the old one grazed. When
+/// `bad` lies that close to an end of the edge, the neighbouring edges are re-planned with it
+/// (and at the path's own ends, the avoided ball shrinks to leave them out).
+#[allow(clippy::too_many_arguments)]
+fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    space: &S,
+    validator: &mut V,
+    path: &Path,
+    edge: usize,
+    bad: &[f64],
+    resolution: f64,
+    budget: Duration,
+    rng: &mut R,
+) -> Result<Path, PlanError> {
+    let states = &path.states;
+    let last = states.len().saturating_sub(1);
+    let radius = 2.0 * resolution;
+    let (mut from, mut to) = (edge.min(last), (edge + 1).min(last));
+    while from > 0 && space.distance(&states[from], bad) <= radius {
+        from -= 1;
+    }
+    while to < last && space.distance(&states[to], bad) <= radius {
+        to += 1;
+    }
+    // The path's own ends cannot move: near them, the avoided ball shrinks to leave them out.
+    let ends = space.distance(&states[from], bad).min(space.distance(&states[to], bad));
+    let mut avoiding = Avoiding {
+        space,
+        inner: validator,
+        avoid: bad,
+        radius: radius.min(0.5 * ends),
+    };
+    let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
+    let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);
+    let mut fine = MotionValidator::new(space.clone(), resolution);
+    let solution = BiRrt::plain(Some(range)).plan(
+        &mut fine,
+        &mut avoiding,
+        &request,
+        &Budget::time(budget.as_secs_f64().max(1e-3)),
+        rng,
+    )?;
+    let mut out = states[..from].to_vec();
+    out.extend(solution.path.states);
+    out.extend(states[to + 1..].iter().cloned());
+    Ok(Path { states: out })
 }
 
 fn invalid_motion(e: TrajectoryError) -> PlanError {

@@ -512,3 +512,91 @@ proptest! {
         prop_assert!(t.check(motion.space(), &mut Walls::shrunk(0.003), 0.0005).is_ok());
     }
 }
+
+/// Invalid only within 1e-9 of one state: a graze so thin that only a sample landing on it
+/// finds it.
+struct Pin {
+    at: Vec<f64>,
+    checks: u64,
+}
+
+impl StateValidator for Pin {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        (q[0] - self.at[0]).hypot(q[1] - self.at[1]) > 1e-9
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+/// Valid everywhere; remembers what it was asked.
+#[derive(Default)]
+struct Record(Vec<Vec<f64>>);
+
+impl StateValidator for Record {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.0.push(q.to_vec());
+        true
+    }
+    fn checks(&self) -> u64 {
+        self.0.len() as u64
+    }
+}
+
+#[test]
+fn smoothing_detours_around_a_graze_only_the_verification_samples() {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    let space = square();
+    let limits = limits2();
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.3]],
+    };
+    let r = 0.01;
+    // A state the verification samples on the edge, far from every state the edge check at the
+    // same spacing samples.
+    let mut verified = Record::default();
+    Trajectory::rest_to_rest(&space, &path, &limits)
+        .unwrap()
+        .check(&space, &mut verified, r)
+        .unwrap();
+    let mut edge = Record::default();
+    assert!(MotionValidator::new(space.clone(), r).check_motion(&mut edge, &path.states[0], &path.states[1]));
+    let pin = verified
+        .0
+        .iter()
+        .filter(|q| (0.3..0.7).contains(&q[0]))
+        .find(|q| edge.0.iter().all(|p| space.distance(p, q) > 1e-4))
+        .expect("the two sample sets differ")
+        .clone();
+    let settings = ShortcutSettings {
+        fine_resolution: Some(r),
+        verify_resolution: Some(r),
+        ..Default::default()
+    };
+    for smoothing in [Smoothing::None, Smoothing::Parabolic] {
+        let mut motion = MotionValidator::new(space.clone(), 0.02);
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut validator = Pin {
+            at: pin.clone(),
+            checks: 0,
+        };
+        let out = smooth(
+            smoothing,
+            &mut motion,
+            &mut validator,
+            &path,
+            &limits,
+            &settings,
+            std::time::Duration::from_secs(1),
+            &mut rng,
+        )
+        .unwrap_or_else(|e| panic!("{smoothing:?}: {e}"));
+        assert!(
+            out.fell_back,
+            "{smoothing:?}: the straight edge should have failed verification"
+        );
+        assert!(out.path.states.len() > 2, "{smoothing:?}: the edge was not re-planned");
+        assert!(out.trajectory.check(&space, &mut validator, r).is_ok());
+    }
+}

@@ -278,7 +278,11 @@ impl Obb {
     fn at(pose: &Pose, half: Vector) -> Self {
         Self {
             center: pose.translation,
-            axes: [pose.rotation * Vector::X, pose.rotation * Vector::Y, pose.rotation * Vector::Z],
+            axes: [
+                pose.rotation * Vector::X,
+                pose.rotation * Vector::Y,
+                pose.rotation * Vector::Z,
+            ],
             half,
         }
     }

@@ -207,6 +207,14 @@ impl Trajectory {
         t
     }
 
+    /// Index of the span playing at time `t` (the first whose end is not before `t`; the last
+    /// one past the end). For [`Trajectory::rest_to_rest`] this is the path's segment index.
+    pub(crate) fn span_at(&self, t: f64) -> usize {
+        self.ends
+            .partition_point(|&end| end < t)
+            .min(self.spans.len().saturating_sub(1))
+    }
+
     fn recompute_ends(&mut self) {
         self.ends.clear();
         let mut end = 0.0;
