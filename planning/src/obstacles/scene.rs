@@ -146,7 +146,8 @@ impl ParryScene {
 impl ParryScene {
     /// [`Obstacles::first_hit`] for small scenes without a margin: a scan of the bounding
     /// boxes, closed forms for a ball (against every obstacle kind but meshes) and for a box
-    /// against a box, parry for the rest.
+    /// against a box, the box around a cylinder against a box before parry's test, parry for
+    /// the rest.
     fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
         if let Some(ball) = shape.as_ball() {
             let (c, r) = (pose.translation, ball.radius);
@@ -164,6 +165,22 @@ impl ParryScene {
                     axes: *axes,
                     half: *half,
                 }),
+                _ => self.touches(i as u32, shape, pose),
+            });
+        }
+        if let Some(cylinder) = shape.as_cylinder() {
+            // The box around the cylinder (its axis is local y) rules out most boxes before
+            // parry's GJK runs.
+            let (r, h) = (cylinder.radius, cylinder.half_height);
+            let around = Obb::at(pose, Vector::new(r, h, r));
+            return self.boxes.first_overlapping(&around.aabb(), |i| match &self.quick[i] {
+                Quick::Cuboid { center, half, axes } => {
+                    around.touches(&Obb {
+                        center: *center,
+                        axes: *axes,
+                        half: *half,
+                    }) && self.touches(i as u32, shape, pose)
+                }
                 _ => self.touches(i as u32, shape, pose),
             });
         }
