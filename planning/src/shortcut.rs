@@ -475,17 +475,20 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     })
 }
 
-/// Rejects states within `radius` of `avoid` (in the space's distance), on top of `inner`.
+/// Rejects states within `radius` of `avoid` (in the space's distance), on top of `inner`,
+/// except the two states in `keep` (the ends of the re-planned stretch).
 struct Avoiding<'a, S, V: ?Sized> {
     space: &'a S,
     inner: &'a mut V,
     avoid: &'a [f64],
     radius: f64,
+    keep: [&'a [f64]; 2],
 }
 
 impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V> {
     fn is_valid(&mut self, q: &[f64]) -> bool {
-        self.space.distance(q, self.avoid) > self.radius && self.inner.is_valid(q)
+        let kept = self.keep.contains(&q);
+        (kept || self.space.distance(q, self.avoid) > self.radius) && self.inner.is_valid(q)
     }
 
     fn checks(&self) -> u64 {
@@ -493,11 +496,13 @@ impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V>
     }
 }
 
-/// `path` with edge `edge` (from state `edge` to `edge + 1`) re-planned at `resolution` around
-/// `bad`, a colliding state on it that the edge's samples missed: states within two spacings
-/// of `bad` count as invalid, so the new edges keep clear of where the old one grazed. When
-/// `bad` lies that close to an end of the edge, the neighbouring edges are re-planned with it
-/// (and at the path's own ends, the avoided ball shrinks to leave them out).
+/// `path` with edge `edge` (from state `edge` to `edge + 1`) re-planned around `bad`, a
+/// colliding state on it that the edge's samples missed. States within two spacings of `bad`
+/// count as invalid, so the new edges keep clear of where the old one grazed; when `bad` lies
+/// that close to an end of the edge, the neighbouring edges are re-planned with it. The ends of
+/// the whole path cannot move: when `bad` is next to one, the avoided ball shrinks to half the
+/// distance (but not below ¾ of a spacing, the end itself excepted) and the new edges are
+/// checked at half the spacing, so that an edge coming in past `bad` has a sample inside it.
 #[allow(clippy::too_many_arguments)]
 fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     space: &S,
@@ -519,24 +524,19 @@ fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     while to < last && space.distance(&states[to], bad) <= radius {
         to += 1;
     }
-    // The path's own ends cannot move: near them, the avoided ball shrinks to leave them out.
     let ends = space.distance(&states[from], bad).min(space.distance(&states[to], bad));
     let mut avoiding = Avoiding {
         space,
         inner: validator,
         avoid: bad,
-        radius: radius.min(0.5 * ends),
+        radius: radius.min(0.5 * ends).max(0.75 * resolution),
+        keep: [&states[from], &states[to]],
     };
     let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
     let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);
-    let mut fine = MotionValidator::new(space.clone(), resolution);
-    let solution = BiRrt::plain(Some(range)).plan(
-        &mut fine,
-        &mut avoiding,
-        &request,
-        &Budget::time(budget.as_secs_f64().max(1e-3)),
-        rng,
-    )?;
+    let mut fine = MotionValidator::new(space.clone(), 0.5 * resolution);
+    let budget = Budget::time(budget.as_secs_f64().max(1e-3));
+    let solution = BiRrt::plain(Some(range)).plan(&mut fine, &mut avoiding, &request, &budget, rng)?;
     let mut out = states[..from].to_vec();
     out.extend(solution.path.states);
     out.extend(states[to + 1..].iter().cloned());
