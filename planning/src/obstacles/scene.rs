@@ -150,42 +150,38 @@ impl ParryScene {
     /// the rest.
     fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
         if let Some(ball) = shape.as_ball() {
-            let (c, r) = (pose.translation, ball.radius);
-            return self.boxes.first_near(c, r, |i| {
-                self.quick[i]
-                    .ball(c, r)
-                    .unwrap_or_else(|| self.touches(i as u32, shape, pose))
-            });
+            return self.scan_ball(pose.translation, ball.radius);
         }
-        if let Some(cuboid) = shape.as_cuboid() {
-            let obb = Obb::at(pose, cuboid.half_extents);
-            return self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
-                Quick::Cuboid { center, half, axes } => obb.touches(&Obb {
-                    center: *center,
-                    axes: *axes,
-                    half: *half,
-                }),
-                _ => self.touches(i as u32, shape, pose),
-            });
-        }
-        if let Some(cylinder) = shape.as_cylinder() {
-            // The box around the cylinder (its axis is local y) rules out most boxes before
-            // parry's GJK runs.
-            let (r, h) = (cylinder.radius, cylinder.half_height);
-            let around = Obb::at(pose, Vector::new(r, h, r));
-            return self.boxes.first_overlapping(&around.aabb(), |i| match &self.quick[i] {
-                Quick::Cuboid { center, half, axes } => {
-                    around.touches(&Obb {
-                        center: *center,
-                        axes: *axes,
-                        half: *half,
-                    }) && self.touches(i as u32, shape, pose)
-                }
-                _ => self.touches(i as u32, shape, pose),
-            });
-        }
-        self.boxes
-            .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose))
+        // A box is its own box; a cylinder (axis local y) is tested as the box around it
+        // first, and by parry only when that box touches.
+        let (obb, exact) = if let Some(cuboid) = shape.as_cuboid() {
+            (Obb::at(pose, cuboid.half_extents), true)
+        } else if let Some(c) = shape.as_cylinder() {
+            (Obb::at(pose, Vector::new(c.radius, c.half_height, c.radius)), false)
+        } else {
+            return self
+                .boxes
+                .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose));
+        };
+        self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
+            Quick::Cuboid(other) => obb.touches(other) && (exact || self.touches(i as u32, shape, pose)),
+            _ => self.touches(i as u32, shape, pose),
+        })
+    }
+
+    /// The first obstacle that a ball of `radius` at `center` touches (within the margin),
+    /// for small scenes: a scan of the bounding boxes, closed forms where the obstacle has one.
+    fn scan_ball(&self, center: Vector, radius: Real) -> Option<usize> {
+        let r = radius + self.margin;
+        self.boxes.first_near(center, r, |i| {
+            self.quick[i].ball(center, r).unwrap_or_else(|| {
+                self.touches(
+                    i as u32,
+                    &parry3d::shape::Ball::new(radius),
+                    &Pose::from_translation(center),
+                )
+            })
+        })
     }
 }
 
@@ -283,7 +279,8 @@ impl SoaBoxes {
     }
 }
 
-/// An oriented box: centre, local axes in the world and half extents along them.
+/// An oriented box: centre, local axes in the world (the rows of the world-to-box rotation)
+/// and half extents along them.
 #[derive(Clone, Copy, Debug)]
 struct Obb {
     center: Vector,
@@ -366,13 +363,8 @@ const OBB_PARALLEL_SLACK: Real = 1e-6;
 /// A ball test in closed form: the obstacle's shape in its own frame.
 #[derive(Clone, Debug)]
 enum Quick {
-    /// A box in the world: centre, half extents and its local axes.
-    Cuboid {
-        center: Vector,
-        half: Vector,
-        /// The box's local axes in the world (rows of the world-to-box rotation).
-        axes: [Vector; 3],
-    },
+    /// A box in the world.
+    Cuboid(Obb),
     Ball {
         center: Vector,
         radius: Real,
@@ -441,10 +433,10 @@ impl Lane for f32x8 {
     }
 }
 
-/// Squared distance from the point at offset `(dx, dy, dz)` from a box's centre to the box
-/// (local `axes` in the world, `half` extents along them).
+/// Squared distance from the point at offset `(dx, dy, dz)` from the box's centre to the box.
 #[inline(always)]
-fn cuboid_gap2<L: Lane>(dx: L, dy: L, dz: L, axes: &[Vector; 3], half: Vector) -> L {
+fn cuboid_gap2<L: Lane>(dx: L, dy: L, dz: L, obb: &Obb) -> L {
+    let (axes, half) = (&obb.axes, obb.half);
     let out = |a: Vector, h: Real| (dx * L::splat(a.x) + dy * L::splat(a.y) + dz * L::splat(a.z)).abs() - L::splat(h);
     let (ox, oy, oz) = (
         out(axes[0], half.x).max0(),
@@ -479,11 +471,7 @@ impl Quick {
     fn of(o: &Obstacle) -> Self {
         let s = &*o.shape;
         if let Some(c) = s.as_cuboid() {
-            Quick::Cuboid {
-                center: o.pose.translation,
-                half: c.half_extents,
-                axes: [Vector::X, Vector::Y, Vector::Z].map(|a| o.pose.transform_vector(a)),
-            }
+            Quick::Cuboid(Obb::at(&o.pose, c.half_extents))
         } else if let Some(b) = s.as_ball() {
             Quick::Ball {
                 center: o.pose.translation,
@@ -511,9 +499,9 @@ impl Quick {
     #[inline]
     fn ball(&self, center: Vector, radius: Real) -> Option<bool> {
         Some(match self {
-            Quick::Cuboid { center: c, half, axes } => {
-                let d = center - *c;
-                cuboid_gap2(d.x, d.y, d.z, axes, *half) <= radius * radius
+            Quick::Cuboid(b) => {
+                let d = center - b.center;
+                cuboid_gap2(d.x, d.y, d.z, b) <= radius * radius
             }
             Quick::Ball { center: c, radius: r } => {
                 let d = center - *c;
@@ -566,10 +554,10 @@ impl Quick {
         }
         let at = |c: Vector| (f32x8::splat(c.x), f32x8::splat(c.y), f32x8::splat(c.z));
         Some(match *self {
-            Quick::Cuboid { center, half, axes } => {
-                let (cx, cy, cz) = at(center);
+            Quick::Cuboid(ref obb) => {
+                let (cx, cy, cz) = at(obb.center);
                 lanes(b, n, margin, |x, y, z, r| {
-                    cuboid_gap2(x - cx, y - cy, z - cz, &axes, half).simd_le(r * r)
+                    cuboid_gap2(x - cx, y - cy, z - cz, obb).simd_le(r * r)
                 })
             }
             Quick::Ball { center, radius: rc } => {
@@ -671,15 +659,7 @@ impl Obstacles for ParryScene {
             return true;
         }
         if self.quick.len() <= SCAN_LIMIT {
-            let ball = || parry3d::shape::Ball::new(radius);
-            return self
-                .boxes
-                .first_near(center, r, |i| {
-                    self.quick[i]
-                        .ball(center, r)
-                        .unwrap_or_else(|| self.touches(i as u32, &ball(), &Pose::from_translation(center)))
-                })
-                .is_some();
+            return self.scan_ball(center, radius).is_some();
         }
         let query_box = Aabb::new(center - Vector::splat(r), center + Vector::splat(r));
         self.bvh.intersect_aabb(&query_box).any(|i| {

@@ -407,10 +407,7 @@ impl Trajectory {
     /// Position (and velocity) at time `t`, clamped to `[0, duration]`. Does not allocate.
     pub fn sample(&self, t: f64, q: &mut [f64], v: Option<&mut [f64]>) {
         let t = t.clamp(0.0, self.duration());
-        let i = self
-            .ends
-            .partition_point(|&e| e < t)
-            .min(self.spans.len().saturating_sub(1));
+        let i = self.span_at(t);
         let start = if i == 0 { 0.0 } else { self.ends[i - 1] };
         let span = &self.spans[i];
         span.piece.eval(span.offset + (t - start).min(span.duration), q, v);
