@@ -393,8 +393,9 @@ impl RobotModel {
     }
 
     /// A few balls (in the link frame) whose union contains the link's whole collision shape,
-    /// or an empty slice for a link without one. Built once per model on first use (tens of
-    /// milliseconds for every link of the Fetch); see [`crate::spheres`] for how.
+    /// or an empty slice for a link without one. Built once per model on first use (about a
+    /// second of CPU time for every link of the Fetch, spread over the cores; a built-in
+    /// robot's covers once per process); see [`crate::spheres`] for how.
     ///
     /// ```
     /// use hearth_kinematics::RobotModel;

@@ -13,6 +13,7 @@
 //!    of its points + that point's `h`. Every point of the part is within `h` of a kept grid
 //!    point, and that grid point lies in some ball shrunk by `h`, so the balls cover the part.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use nalgebra::Point3;
@@ -24,12 +25,38 @@ use crate::model::{LinkShape, RobotModel};
 /// Covers of every link of `model`. The built-in robots' covers are computed once per process
 /// and shared by every model loaded from the same embedded text.
 pub(crate) fn covers(model: &RobotModel) -> Arc<Vec<Vec<Sphere>>> {
+    // Links are independent: they are covered on every core at once (the Fetch's take about
+    // a second on one), each thread taking the next link not yet taken. A cover depends only
+    // on its link, so the result does not depend on the threads.
     let compute = || {
-        Arc::new(
-            (0..model.links().len())
-                .map(|l| model.link_shape(l).map(cover).unwrap_or_default())
-                .collect::<Vec<_>>(),
-        )
+        let n = model.links().len();
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |t| t.get())
+            .min(n.max(1));
+        let next = AtomicUsize::new(0);
+        let mut out = vec![Vec::new(); n];
+        std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|_| {
+                    scope.spawn(|| {
+                        let mut done = Vec::new();
+                        loop {
+                            let l = next.fetch_add(1, Ordering::Relaxed);
+                            if l >= n {
+                                return done;
+                            }
+                            done.push((l, model.link_shape(l).map(cover).unwrap_or_default()));
+                        }
+                    })
+                })
+                .collect();
+            for worker in workers {
+                for (l, balls) in worker.join().expect("a cover thread panicked") {
+                    out[l] = balls;
+                }
+            }
+        });
+        Arc::new(out)
     };
     if !model.source_name().starts_with("builtin:") {
         return compute();
