@@ -4,7 +4,10 @@
 //! Each op stores its joint origin and axis by value; evaluating it is one `sin_cos`, two
 //! quaternion products and one rotated vector. Nothing allocates.
 
+use std::ops::{Add, Mul, Sub};
+
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use wide::f64x4;
 
 use crate::error::Result;
 use crate::model::RobotModel;
@@ -70,49 +73,217 @@ impl FkOp {
     /// The child's pose relative to its parent link for configuration `q`.
     #[inline(always)]
     pub(crate) fn local(&self, q: &[f64]) -> Isometry3<f64> {
+        let v = match self.motion {
+            Motion::Fixed => 0.0,
+            Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
+                q[var as usize]
+            }
+        };
+        self.local_at::<f64>(v, sin_cos).to_isometry()
+    }
+
+    /// The child's pose relative to its parent for joint value `v` (ignored by fixed joints),
+    /// one lane per configuration. `sin_cos` evaluates the half angle of a revolute joint.
+    #[inline(always)]
+    fn local_at<L: Lanes>(&self, v: L, sin_cos: impl Fn(L) -> (L, L)) -> PoseLanes<L> {
+        let origin = PoseLanes::<L>::splat(&self.origin);
         match self.motion {
-            Motion::Fixed => self.origin,
+            Motion::Fixed => origin,
             Motion::RevoluteAxis {
                 axis,
-                var,
                 multiplier,
                 offset,
+                ..
             } => {
-                let half = 0.5 * (multiplier * q[var as usize] + offset);
+                let half = L::splat(0.5) * (L::splat(multiplier) * v + L::splat(offset));
                 let (s, c) = sin_cos(half);
-                let o = self.origin.rotation.quaternion();
-                let (w, x, y, z) = (o.w, o.i, o.j, o.k);
+                let [w, x, y, z] = origin.q;
                 // o · (c + s·e), with e the unit axis quaternion: 8 products instead of 16.
-                let r = match axis {
-                    Axis::X => Quaternion::new(w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s),
-                    Axis::Y => Quaternion::new(w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s),
-                    _ => Quaternion::new(w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s),
+                let q = match axis {
+                    Axis::X => [w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s],
+                    Axis::Y => [w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s],
+                    _ => [w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s],
                 };
-                Isometry3::from_parts(self.origin.translation, UnitQuaternion::new_unchecked(r))
+                PoseLanes { q, t: origin.t }
             }
             Motion::Revolute {
                 axis,
-                var,
                 multiplier,
                 offset,
+                ..
             } => {
-                let half = 0.5 * (multiplier * q[var as usize] + offset);
+                let half = L::splat(0.5) * (L::splat(multiplier) * v + L::splat(offset));
                 let (s, c) = sin_cos(half);
-                let rot = UnitQuaternion::new_unchecked(Quaternion::from_parts(c, axis.into_inner() * s));
-                Isometry3::from_parts(self.origin.translation, self.origin.rotation * rot)
+                let rot = [c, L::splat(axis.x) * s, L::splat(axis.y) * s, L::splat(axis.z) * s];
+                PoseLanes {
+                    q: quat_mul(&origin.q, &rot),
+                    t: origin.t,
+                }
             }
             Motion::Prismatic {
                 axis,
-                var,
                 multiplier,
                 offset,
+                ..
             } => {
-                let d = multiplier * q[var as usize] + offset;
-                let t = self.origin.translation.vector + self.origin.rotation * (axis.into_inner() * d);
-                Isometry3::from_parts(Translation3::from(t), self.origin.rotation)
+                let d = L::splat(multiplier) * v + L::splat(offset);
+                let moved = rotate(
+                    &origin.q,
+                    &[L::splat(axis.x) * d, L::splat(axis.y) * d, L::splat(axis.z) * d],
+                );
+                PoseLanes {
+                    q: origin.q,
+                    t: [origin.t[0] + moved[0], origin.t[1] + moved[1], origin.t[2] + moved[2]],
+                }
             }
         }
     }
+}
+
+/// Arithmetic that forward kinematics needs, for one configuration (`f64`) or four at once
+/// (`f64x4`). Both run the same operations in the same order, so a pose computed four at a
+/// time equals, bit for bit, the pose computed alone.
+pub(crate) trait Lanes: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> {
+    fn splat(v: f64) -> Self;
+}
+
+impl Lanes for f64 {
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        v
+    }
+}
+
+impl Lanes for f64x4 {
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        f64x4::splat(v)
+    }
+}
+
+/// A rigid pose as a unit quaternion `q = [w, x, y, z]` and a translation `t`, per lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PoseLanes<L> {
+    q: [L; 4],
+    t: [L; 3],
+}
+
+impl<L: Lanes> PoseLanes<L> {
+    #[inline(always)]
+    fn splat(p: &Isometry3<f64>) -> Self {
+        let (q, t) = (p.rotation.quaternion(), &p.translation.vector);
+        Self {
+            q: [L::splat(q.w), L::splat(q.i), L::splat(q.j), L::splat(q.k)],
+            t: [L::splat(t.x), L::splat(t.y), L::splat(t.z)],
+        }
+    }
+
+    /// `self · other`.
+    #[inline(always)]
+    fn then(&self, other: &Self) -> Self {
+        let r = rotate(&self.q, &other.t);
+        Self {
+            q: quat_mul(&self.q, &other.q),
+            t: [self.t[0] + r[0], self.t[1] + r[1], self.t[2] + r[2]],
+        }
+    }
+}
+
+impl PoseLanes<f64> {
+    #[inline(always)]
+    fn to_isometry(self) -> Isometry3<f64> {
+        let [w, x, y, z] = self.q;
+        Isometry3::from_parts(
+            Translation3::new(self.t[0], self.t[1], self.t[2]),
+            UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
+        )
+    }
+}
+
+impl PoseLanes<f64x4> {
+    /// Lane `k`.
+    #[inline(always)]
+    fn lane(&self, k: usize) -> PoseLanes<f64> {
+        PoseLanes {
+            q: self.q.map(|v| v.as_array()[k]),
+            t: self.t.map(|v| v.as_array()[k]),
+        }
+    }
+
+    /// Lane `k` from `poses[k]`.
+    #[inline(always)]
+    fn gather(poses: [&Isometry3<f64>; 4]) -> Self {
+        let q = poses.map(|p| p.rotation.quaternion());
+        let t = poses.map(|p| p.translation.vector);
+        Self {
+            q: [
+                f64x4::new(q.map(|q| q.w)),
+                f64x4::new(q.map(|q| q.i)),
+                f64x4::new(q.map(|q| q.j)),
+                f64x4::new(q.map(|q| q.k)),
+            ],
+            t: [
+                f64x4::new(t.map(|t| t.x)),
+                f64x4::new(t.map(|t| t.y)),
+                f64x4::new(t.map(|t| t.z)),
+            ],
+        }
+    }
+}
+
+/// Hamilton product `a · b` of quaternions `[w, x, y, z]`.
+#[inline(always)]
+fn quat_mul<L: Lanes>(a: &[L; 4], b: &[L; 4]) -> [L; 4] {
+    let [aw, ax, ay, az] = *a;
+    let [bw, bx, by, bz] = *b;
+    [
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ]
+}
+
+/// `v` rotated by the unit quaternion `q`: `v + w·t + u × t` with `t = 2 u × v`.
+#[inline(always)]
+fn rotate<L: Lanes>(q: &[L; 4], v: &[L; 3]) -> [L; 3] {
+    let [w, x, y, z] = *q;
+    let cross = |a: [L; 3], b: [L; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let u = [x, y, z];
+    let two = L::splat(2.0);
+    let c = cross(u, *v);
+    let t = [c[0] * two, c[1] * two, c[2] * two];
+    let ut = cross(u, t);
+    [
+        v[0] + w * t[0] + ut[0],
+        v[1] + w * t[1] + ut[1],
+        v[2] + w * t[2] + ut[2],
+    ]
+}
+
+/// [`sin_cos`] of four values: the same reduction and polynomials per lane (so the same bits),
+/// with libm for lanes outside its range.
+#[inline(always)]
+fn sin_cos4(x: f64x4) -> (f64x4, f64x4) {
+    let xs = x.to_array();
+    if xs.iter().any(|v| v.abs() >= 1e5 || v.is_nan()) {
+        let sc = xs.map(sin_cos);
+        return (f64x4::new(sc.map(|p| p.0)), f64x4::new(sc.map(|p| p.1)));
+    }
+    let (k, s, c) = sin_cos_reduced(x);
+    let (k, s, c) = (k.to_array(), s.to_array(), c.to_array());
+    let mut so = [0.0; 4];
+    let mut co = [0.0; 4];
+    for i in 0..4 {
+        (so[i], co[i]) = quadrant(k[i], s[i], c[i]);
+    }
+    (f64x4::new(so), f64x4::new(co))
 }
 
 /// The compiled forward-kinematics program of a model: `ops[i]` computes link `i + 1`.
@@ -139,15 +310,49 @@ impl FkProgram {
     #[inline(always)]
     fn eval<'a>(ops: impl Iterator<Item = &'a FkOp>, q: &[f64], poses: &mut [Isometry3<f64>]) {
         let mut prev_child = 0u32;
-        let mut prev = poses[0];
+        let mut prev = PoseLanes::<f64>::splat(&poses[0]);
         for op in ops {
             let parent = if op.parent == prev_child {
                 prev
             } else {
-                poses[op.parent as usize]
+                PoseLanes::splat(&poses[op.parent as usize])
             };
-            let pose = parent * op.local(q);
-            poses[op.child as usize] = pose;
+            let v = match op.motion {
+                Motion::Fixed => 0.0,
+                Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
+                    q[var as usize]
+                }
+            };
+            let pose = parent.then(&op.local_at(v, sin_cos));
+            poses[op.child as usize] = pose.to_isometry();
+            prev = pose;
+            prev_child = op.child;
+        }
+    }
+
+    /// [`FkProgram::run_subset`] for four configurations at once, bit for bit the same poses.
+    #[inline]
+    pub(crate) fn run_subset4(&self, subset: &[u32], q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
+        let mut prev_child = u32::MAX;
+        let mut prev = PoseLanes::<f64x4>::splat(&Isometry3::identity());
+        for op in subset.iter().map(|&i| &self.ops[i as usize]) {
+            let p = op.parent as usize;
+            let parent = if op.parent == prev_child {
+                prev
+            } else {
+                PoseLanes::gather([&poses[0][p], &poses[1][p], &poses[2][p], &poses[3][p]])
+            };
+            let v = match op.motion {
+                Motion::Fixed => f64x4::splat(0.0),
+                Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
+                    let v = var as usize;
+                    f64x4::new([q[0][v], q[1][v], q[2][v], q[3][v]])
+                }
+            };
+            let pose = parent.then(&op.local_at(v, sin_cos4));
+            for (k, buf) in poses.iter_mut().enumerate() {
+                buf[op.child as usize] = pose.lane(k).to_isometry();
+            }
             prev = pose;
             prev_child = op.child;
         }
@@ -233,6 +438,47 @@ impl RobotModel {
             }
         }
         self.0.fk.run_subset(&subset.ops, q, poses);
+        Ok(())
+    }
+
+    /// [`RobotModel::fk_update`] for four configurations at once: `poses[k]` gets the poses
+    /// of `subset`'s links for `q[k]`, bit for bit what `fk_update` writes, computed four
+    /// lanes at a time. Links outside `subset` must already hold their poses in every buffer.
+    /// (Repeat a configuration to fill unused lanes.)
+    ///
+    /// Does not allocate. Errors on a wrong length or a non-finite value in any lane.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let all = panda.fk_subset(|_| true);
+    /// let mut one = panda.pose_buffer();
+    /// let mut four = std::array::from_fn(|_| panda.pose_buffer());
+    /// let qs: Vec<Vec<f64>> = (0..4).map(|k| vec![0.1 * k as f64, -0.5, 0.2, -2.0, 0.0, 1.5, 0.7, 0.03]).collect();
+    /// panda.fk_update4(&all, std::array::from_fn(|k| qs[k].as_slice()), &mut four).unwrap();
+    /// for k in 0..4 {
+    ///     panda.fk_update(&all, &qs[k], &mut one).unwrap();
+    ///     assert_eq!(one, four[k]);
+    /// }
+    /// ```
+    pub fn fk_update4(&self, subset: &FkSubset, q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) -> Result<()> {
+        for q in q {
+            self.check_configuration(q)?;
+        }
+        for (what, got) in poses
+            .iter()
+            .map(|p| ("pose buffer", p.len()))
+            .chain([("link subset's model", subset.links)])
+        {
+            if got != self.0.links.len() {
+                return Err(crate::KinematicsError::DimensionMismatch {
+                    what,
+                    expected: self.0.links.len(),
+                    got,
+                });
+            }
+        }
+        self.0.fk.run_subset4(&subset.ops, q, poses);
         Ok(())
     }
 
@@ -331,30 +577,44 @@ pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
     if x.abs() >= 1e5 || x.is_nan() {
         return x.sin_cos();
     }
+    let (k, s, c) = sin_cos_reduced(x);
+    quadrant(k, s, c)
+}
+
+/// The quadrant `k` (an integer, as a float) of `x` and the sine and cosine of `x − k·π/2`.
+#[inline(always)]
+fn sin_cos_reduced<L: Lanes>(x: L) -> (L, L, L) {
     // π/2 split so that k·PIO2_HI is exact for |k| < 2^20 (PIO2_HI has 33 significant bits).
     const PIO2_HI: f64 = 1.570_796_326_734_125_6;
     const PIO2_LO: f64 = 6.077_100_506_506_192e-11;
     // Round to nearest without a libm call: adding 1.5·2^52 drops the fraction bits.
     const SHIFT: f64 = 6_755_399_441_055_744.0;
-    let k = (x * std::f64::consts::FRAC_2_PI + SHIFT) - SHIFT;
-    let r = (x - k * PIO2_HI) - k * PIO2_LO;
+    let k = (x * L::splat(std::f64::consts::FRAC_2_PI) + L::splat(SHIFT)) - L::splat(SHIFT);
+    let r = (x - k * L::splat(PIO2_HI)) - k * L::splat(PIO2_LO);
     let r2 = r * r;
+    let p = |c: f64| L::splat(c);
     let s = r
-        * (1.0
-            + r2 * (-1.0 / 6.0
-                + r2 * (1.0 / 120.0
-                    + r2 * (-1.0 / 5040.0
-                        + r2 * (1.0 / 362_880.0
-                            + r2 * (-1.0 / 39_916_800.0
-                                + r2 * (1.0 / 6_227_020_800.0 + r2 * (-1.0 / 1_307_674_368_000.0))))))));
-    let c = 1.0
-        + r2 * (-0.5
-            + r2 * (1.0 / 24.0
-                + r2 * (-1.0 / 720.0
-                    + r2 * (1.0 / 40_320.0
-                        + r2 * (-1.0 / 3_628_800.0
-                            + r2 * (1.0 / 479_001_600.0
-                                + r2 * (-1.0 / 87_178_291_200.0 + r2 / 20_922_789_888_000.0)))))));
+        * (p(1.0)
+            + r2 * (p(-1.0 / 6.0)
+                + r2 * (p(1.0 / 120.0)
+                    + r2 * (p(-1.0 / 5040.0)
+                        + r2 * (p(1.0 / 362_880.0)
+                            + r2 * (p(-1.0 / 39_916_800.0)
+                                + r2 * (p(1.0 / 6_227_020_800.0) + r2 * p(-1.0 / 1_307_674_368_000.0))))))));
+    let c = p(1.0)
+        + r2 * (p(-0.5)
+            + r2 * (p(1.0 / 24.0)
+                + r2 * (p(-1.0 / 720.0)
+                    + r2 * (p(1.0 / 40_320.0)
+                        + r2 * (p(-1.0 / 3_628_800.0)
+                            + r2 * (p(1.0 / 479_001_600.0)
+                                + r2 * (p(-1.0 / 87_178_291_200.0) + r2 * p(1.0 / 20_922_789_888_000.0))))))));
+    (k, s, c)
+}
+
+/// `(sin x, cos x)` from the reduced pair of quadrant `k` (signs and a swap: exact).
+#[inline(always)]
+fn quadrant(k: f64, s: f64, c: f64) -> (f64, f64) {
     match (k as i64) & 3 {
         0 => (s, c),
         1 => (c, -s),

@@ -275,3 +275,48 @@ fn fk_from_places_the_root() {
         assert!(((base * a).to_homogeneous() - b.to_homogeneous()).abs().max() < 1e-12);
     }
 }
+
+/// Four configurations at a time give, bit for bit, the poses each gives alone: on every
+/// built-in robot (revolute, continuous, prismatic and mimic joints), for the whole model and
+/// for the links below one joint, with lanes that repeat a configuration.
+#[test]
+fn four_lanes_equal_one_at_a_time() {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(17);
+    for robot in BUILTIN_ROBOTS {
+        let (name, model) = (robot.name, RobotModel::builtin(robot.name).unwrap());
+        let n = model.links().len();
+        let subsets = [
+            model.fk_subset(|_| true),
+            model.fk_subset(|l| l >= n / 3 && model.joints_to(l).len() > 1),
+        ];
+        let root = Isometry3::new(Vector3::new(0.3, -0.2, 0.1), Vector3::new(0.0, 0.0, 0.7));
+        for subset in &subsets {
+            for round in 0..50 {
+                let qs: Vec<Vec<f64>> = (0..4)
+                    .map(|_| {
+                        let mut q = vec![0.0; model.dof()];
+                        model.random_configuration(&mut rng, &mut q);
+                        q
+                    })
+                    .collect();
+                let lane_q: [&[f64]; 4] = std::array::from_fn(|k| qs[if round % 5 == 0 { 0 } else { k }].as_slice());
+                // Links outside the subset hold the poses of a full pass from `root`.
+                let mut base = model.pose_buffer();
+                model.fk_from(&root, lane_q[0], &mut base).unwrap();
+                let mut four: [Vec<Isometry3<f64>>; 4] = std::array::from_fn(|_| base.clone());
+                model.fk_update4(subset, lane_q, &mut four).unwrap();
+                for k in 0..4 {
+                    let mut one = base.clone();
+                    model.fk_update(subset, lane_q[k], &mut one).unwrap();
+                    assert_eq!(one, four[k], "{name}, lane {k}");
+                }
+            }
+        }
+        let bad = vec![f64::NAN; model.dof()];
+        let ok = vec![0.0; model.dof()];
+        let mut four: [Vec<Isometry3<f64>>; 4] = std::array::from_fn(|_| model.pose_buffer());
+        assert!(model.fk_update4(&subsets[0], [&ok, &ok, &bad, &ok], &mut four).is_err());
+        let mut short: [Vec<Isometry3<f64>>; 4] = std::array::from_fn(|_| vec![Isometry3::identity(); 1]);
+        assert!(model.fk_update4(&subsets[0], [&ok; 4], &mut short).is_err());
+    }
+}

@@ -30,6 +30,8 @@ pub struct MotionValidator<S: Space> {
     resolution: f64,
     state: Vec<f64>,
     queue: VecDeque<(u32, u32)>,
+    /// The states of the edge being checked, in checking order, a few at a time.
+    batch: Vec<f64>,
     motions: u64,
 }
 
@@ -41,6 +43,7 @@ impl<S: Space> MotionValidator<S> {
             space,
             resolution: if resolution > 0.0 { resolution } else { 0.01 },
             state: vec![0.0; dim],
+            batch: Vec::with_capacity(BATCH * dim),
             queue: VecDeque::with_capacity(64),
             motions: 0,
         }
@@ -67,24 +70,35 @@ impl<S: Space> MotionValidator<S> {
         ((d / self.resolution).ceil() as u32).max(1)
     }
 
-    /// Whether every intermediate state from `a` to `b` is valid.
+    /// Whether every intermediate state from `a` to `b` is valid. The states go to the
+    /// validator [`BATCH`] at a time in checking order ([`StateValidator::first_invalid`]), so
+    /// an implementation can compute them together.
     pub fn check_motion<V: StateValidator + ?Sized>(&mut self, validator: &mut V, a: &[f64], b: &[f64]) -> bool {
         self.motions += 1;
         let n = self.segments(a, b);
+        let dim = self.state.len();
         self.queue.clear();
         self.queue.push_back((0, n));
+        self.batch.clear();
         while let Some((lo, hi)) = self.queue.pop_front() {
             if hi - lo < 2 {
                 continue;
             }
             let mid = lo + (hi - lo) / 2;
             self.space.interpolate(a, b, mid as f64 / n as f64, &mut self.state);
-            if !validator.is_valid(&self.state) {
-                return false;
+            self.batch.extend_from_slice(&self.state);
+            if self.batch.len() == BATCH * dim {
+                if validator.first_invalid(&self.batch, dim).is_some() {
+                    return false;
+                }
+                self.batch.clear();
             }
             self.queue.push_back((lo, mid));
             self.queue.push_back((mid, hi));
         }
-        true
+        self.batch.is_empty() || validator.first_invalid(&self.batch, dim).is_none()
     }
 }
+
+/// How many states of an edge [`MotionValidator::check_motion`] hands to the validator at once.
+pub const BATCH: usize = 4;

@@ -310,7 +310,7 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         let left = budget.saturating_sub(clock.start.elapsed()).as_secs_f64().max(1e-3);
         let request = PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone()));
         let range = (space.distance(&w[0], &w[1]) / 4.0).clamp(10.0 * fine_resolution, 0.25);
-        let mut planner = BiRrt::plain(Some(range));
+        let mut planner = BiRrt::with_range(Some(range));
         let solution = planner.plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
         out.extend(solution.path.states.into_iter().skip(1));
         repaired += 1;

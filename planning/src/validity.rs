@@ -16,6 +16,28 @@ pub trait StateValidator {
     fn is_valid(&mut self, q: &[f64]) -> bool;
     /// How many configurations have been checked so far.
     fn checks(&self) -> u64;
+
+    /// Checks the states in `states` (`dim` values each, one after another) in order and
+    /// returns the index of the first invalid one, or `None` when all are valid. States after
+    /// the first invalid one are not checked (nor counted). Implementations may compute several
+    /// states together (the default asks [`StateValidator::is_valid`] one by one) and must give
+    /// the same answer.
+    ///
+    /// ```
+    /// use hearth_planning::validity::StateValidator;
+    /// struct Positive(u64);
+    /// impl StateValidator for Positive {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; q[0] > 0.0 }
+    ///     fn checks(&self) -> u64 { self.0 }
+    /// }
+    /// let mut v = Positive(0);
+    /// assert_eq!(v.first_invalid(&[1.0, 2.0, -1.0, 3.0], 1), Some(2));
+    /// assert_eq!(v.checks(), 3);
+    /// assert_eq!(v.first_invalid(&[1.0, 2.0], 1), None);
+    /// ```
+    fn first_invalid(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+        states.chunks_exact(dim.max(1)).position(|q| !self.is_valid(q))
+    }
 }
 
 /// What makes a configuration invalid, with names for messages.
@@ -127,6 +149,12 @@ pub struct RobotValidity {
     moving_fk: FkSubset,
     /// Whether `poses` of the links that do not move are current.
     fixed_poses_current: bool,
+    /// Four configurations checked together ([`StateValidator::first_invalid`]): full
+    /// configurations and pose buffers, one per lane.
+    lane_q: [Vec<f64>; 4],
+    lane_poses: [Vec<Isometry3<f64>>; 4],
+    /// Whether the lane buffers hold the current poses of the links that do not move.
+    lanes_current: bool,
 }
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
@@ -338,6 +366,9 @@ impl RobotValidity {
             fixed_clear: None,
             moving_fk,
             fixed_poses_current: false,
+            lane_q: std::array::from_fn(|_| model.neutral_configuration()),
+            lane_poses: std::array::from_fn(|_| model.pose_buffer()),
+            lanes_current: false,
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -363,6 +394,7 @@ impl RobotValidity {
         self.q_full.copy_from_slice(q_full);
         self.fixed_clear = None;
         self.fixed_poses_current = false;
+        self.lanes_current = false;
         Ok(())
     }
 
@@ -379,6 +411,7 @@ impl RobotValidity {
         self.base = base;
         self.fixed_clear = None;
         self.fixed_poses_current = false;
+        self.lanes_current = false;
     }
 
     /// Attaches an object (a held object moves with the gripper). It is checked against the
@@ -404,7 +437,52 @@ impl RobotValidity {
                 .is_ok();
         }
         self.fixed_poses_current = self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok();
+        self.lanes_current = false;
         self.fixed_poses_current
+    }
+
+    /// Checks up to four states (`dim` values each) with one four-lane forward kinematics
+    /// pass, then each state's obstacles and self-collision in order. `None` when the lanes
+    /// cannot be used for them (the caller checks them one by one).
+    fn first_invalid4(&mut self, states: &[f64], dim: usize) -> Option<Option<usize>> {
+        let n = states.len() / dim;
+        if !(2..=4).contains(&n) || dim != self.chain.dof() || !states.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        if !self.fixed_poses_current {
+            return None;
+        }
+        if !self.lanes_current {
+            for (buf, q) in self.lane_poses.iter_mut().zip(&mut self.lane_q) {
+                buf.copy_from_slice(&self.poses);
+                q.copy_from_slice(&self.q_full);
+            }
+            self.lanes_current = true;
+        }
+        for k in 0..4 {
+            let q = &states[k.min(n - 1) * dim..][..dim];
+            self.chain.scatter(q, &mut self.lane_q[k]);
+        }
+        let [a, b, c, d] = &self.lane_q;
+        if self
+            .model
+            .fk_update4(&self.moving_fk, [a, b, c, d], &mut self.lane_poses)
+            .is_err()
+        {
+            return None;
+        }
+        for k in 0..n {
+            self.checks += 1;
+            std::mem::swap(&mut self.poses, &mut self.lane_poses[k]);
+            std::mem::swap(&mut self.q_full, &mut self.lane_q[k]);
+            let ok = !self.robot_blocked() && !self.attached_blocked();
+            std::mem::swap(&mut self.poses, &mut self.lane_poses[k]);
+            std::mem::swap(&mut self.q_full, &mut self.lane_q[k]);
+            if !ok {
+                return Some(Some(k));
+            }
+        }
+        Some(None)
     }
 
     /// The first obstacle that link `l` touches (exact, part by part).
@@ -712,5 +790,26 @@ impl StateValidator for RobotValidity {
 
     fn checks(&self) -> u64 {
         self.checks
+    }
+
+    /// Four states at a time share one four-lane forward kinematics pass (bit for bit the
+    /// poses of one-by-one checks, so the answers and the check count are the same).
+    fn first_invalid(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+        let dim = dim.max(1);
+        let n = states.len() / dim;
+        let mut start = 0;
+        while start < n {
+            let m = (n - start).min(4);
+            let chunk = &states[start * dim..(start + m) * dim];
+            let found = match self.first_invalid4(chunk, dim) {
+                Some(found) => found,
+                None => chunk.chunks_exact(dim).position(|q| !self.is_valid(q)),
+            };
+            if let Some(k) = found {
+                return Some(start + k);
+            }
+            start += m;
+        }
+        None
     }
 }

@@ -126,6 +126,26 @@ fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize,
     for (i, q) in qs.iter().enumerate().rev() {
         assert_eq!(v.is_valid(q), expected[i], "reverse order, configuration {i}");
     }
+    // Batches of 1 to 9 states (four-lane kinematics inside): the first invalid state of each,
+    // and one check counted per state up to it.
+    let dim = qs[0].len();
+    let mut start = 0;
+    let mut size = 1;
+    while start < qs.len() {
+        let end = (start + size).min(qs.len());
+        let flat: Vec<f64> = qs[start..end].concat();
+        let want = expected[start..end].iter().position(|&ok| !ok);
+        let before = v.checks();
+        assert_eq!(v.first_invalid(&flat, dim), want, "batch {start}..{end}");
+        let counted = want.map_or(end - start, |k| k + 1);
+        assert_eq!(
+            (v.checks() - before) as usize,
+            counted,
+            "checks of batch {start}..{end}"
+        );
+        start = end;
+        size = size % 9 + 1;
+    }
     let valid = expected.iter().filter(|&&b| b).count();
     (valid, expected.len() - valid)
 }

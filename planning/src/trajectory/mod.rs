@@ -593,6 +593,8 @@ pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize
         return None;
     }
     let state = |i: usize| &flat[i * dim..(i + 1) * dim];
+    // Checking order: midpoints coarse to fine, then the two ends.
+    let mut order = Vec::with_capacity(n);
     let mut queue = std::collections::VecDeque::with_capacity(64);
     queue.push_back((0usize, n - 1));
     while let Some((lo, hi)) = queue.pop_front() {
@@ -600,11 +602,24 @@ pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize
             continue;
         }
         let mid = lo + (hi - lo) / 2;
-        if !validator.is_valid(state(mid)) {
-            return Some(mid);
-        }
+        order.push(mid);
         queue.push_back((lo, mid));
         queue.push_back((mid, hi));
     }
-    [n - 1, 0].into_iter().find(|&i| !validator.is_valid(state(i)))
+    order.push(n - 1);
+    if n > 1 {
+        order.push(0);
+    }
+    // A few states at a time, so the validator can compute them together.
+    let mut batch = Vec::with_capacity(crate::motion::BATCH * dim);
+    for group in order.chunks(crate::motion::BATCH) {
+        batch.clear();
+        for &i in group {
+            batch.extend_from_slice(state(i));
+        }
+        if let Some(k) = validator.first_invalid(&batch, dim) {
+            return Some(group[k]);
+        }
+    }
+    None
 }
