@@ -37,8 +37,8 @@ pub enum PlanError {
     },
     /// The budget ran out before a path was found.
     #[error(
-        "no path within the budget ({} iterations, {} states and {} motions checked, {:.3} s)",
-        stats.iterations, stats.states_checked, stats.motions_checked, stats.time.as_secs_f64()
+        "no path within the budget ({} iterations, {} states and {} motions checked, trees of {:?} states, {:.3} s)",
+        stats.iterations, stats.states_checked, stats.motions_checked, stats.tree_sizes, stats.time.as_secs_f64()
     )]
     Timeout {
         /// What the planner did meanwhile.

@@ -602,7 +602,15 @@ fn timeout_reports_stats() {
         &mut NarrowPassage::default(),
     ) {
         match r {
-            Err(PlanError::Timeout { stats }) => {
+            Err(e @ PlanError::Timeout { .. }) => {
+                let PlanError::Timeout { stats } = &e else {
+                    unreachable!()
+                };
+                let sizes = format!("trees of {:?} states", stats.tree_sizes);
+                assert!(
+                    e.to_string().contains(&sizes),
+                    "{name}: the message names the tree sizes: {e}"
+                );
                 assert_eq!(stats.iterations, 3, "{name}");
                 assert!(stats.states_checked >= 2, "{name}: start and goal are checked");
                 assert!(!stats.tree_sizes.is_empty(), "{name}");
