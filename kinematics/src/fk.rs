@@ -428,15 +428,7 @@ impl RobotModel {
     /// ```
     pub fn fk_update(&self, subset: &FkSubset, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
         self.check_configuration(q)?;
-        for (what, got) in [("pose buffer", poses.len()), ("link subset's model", subset.links)] {
-            if got != self.0.links.len() {
-                return Err(crate::KinematicsError::DimensionMismatch {
-                    what,
-                    expected: self.0.links.len(),
-                    got,
-                });
-            }
-        }
+        self.check_link_counts([("pose buffer", poses.len()), ("link subset's model", subset.links)])?;
         self.0.fk.run_subset(&subset.ops, q, poses);
         Ok(())
     }
@@ -465,21 +457,23 @@ impl RobotModel {
         for q in q {
             self.check_configuration(q)?;
         }
-        for (what, got) in poses
-            .iter()
-            .map(|p| ("pose buffer", p.len()))
-            .chain([("link subset's model", subset.links)])
-        {
-            if got != self.0.links.len() {
-                return Err(crate::KinematicsError::DimensionMismatch {
-                    what,
-                    expected: self.0.links.len(),
-                    got,
-                });
-            }
-        }
+        self.check_link_counts(
+            poses
+                .iter()
+                .map(|p| ("pose buffer", p.len()))
+                .chain([("link subset's model", subset.links)]),
+        )?;
         self.0.fk.run_subset4(&subset.ops, q, poses);
         Ok(())
+    }
+
+    /// Errors when one of `sizes` (what, length) is not this model's number of links.
+    fn check_link_counts(&self, sizes: impl IntoIterator<Item = (&'static str, usize)>) -> Result<()> {
+        let expected = self.0.links.len();
+        match sizes.into_iter().find(|&(_, got)| got != expected) {
+            Some((what, got)) => Err(crate::KinematicsError::DimensionMismatch { what, expected, got }),
+            None => Ok(()),
+        }
     }
 
     /// Forward kinematics: writes the world pose of every link into `poses`, with the root at
@@ -505,13 +499,7 @@ impl RobotModel {
     /// Like [`RobotModel::fk`] with the root link placed at `base` (e.g. a mobile base pose).
     pub fn fk_from(&self, base: &Isometry3<f64>, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
         self.check_configuration(q)?;
-        if poses.len() != self.0.links.len() {
-            return Err(crate::KinematicsError::DimensionMismatch {
-                what: "pose buffer",
-                expected: self.0.links.len(),
-                got: poses.len(),
-            });
-        }
+        self.check_link_counts([("pose buffer", poses.len())])?;
         poses[0] = *base;
         self.0.fk.run(q, poses);
         Ok(())
