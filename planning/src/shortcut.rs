@@ -476,7 +476,10 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 }
 
 /// Rejects states within `radius` of `avoid` (in the space's distance), on top of `inner`,
-/// except the two states in `keep` (the ends of the re-planned stretch).
+/// except the two states in `keep` (the ends of the re-planned stretch) and, when an end lies
+/// inside the ball itself, the states nearer to that end than to `avoid` (so a motion can
+/// still leave the end on the side away from `avoid`; one coming in past `avoid` still
+/// crosses the rejected half of the ball).
 struct Avoiding<'a, S, V: ?Sized> {
     space: &'a S,
     inner: &'a mut V,
@@ -487,8 +490,12 @@ struct Avoiding<'a, S, V: ?Sized> {
 
 impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V> {
     fn is_valid(&mut self, q: &[f64]) -> bool {
-        let kept = self.keep.contains(&q);
-        (kept || self.space.distance(q, self.avoid) > self.radius) && self.inner.is_valid(q)
+        let d = self.space.distance(q, self.avoid);
+        let allowed = d > self.radius
+            || self.keep.iter().any(|&end| {
+                end == q || (self.space.distance(end, self.avoid) <= self.radius && self.space.distance(q, end) < d)
+            });
+        allowed && self.inner.is_valid(q)
     }
 
     fn checks(&self) -> u64 {

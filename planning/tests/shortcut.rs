@@ -600,3 +600,67 @@ fn smoothing_detours_around_a_graze_only_the_verification_samples() {
         assert!(out.trajectory.check(&space, &mut validator, r).is_ok());
     }
 }
+
+/// A graze a hair's breadth from the final goal: the re-planned edge must leave the goal on the
+/// side away from the colliding state (the avoided ball contains the goal itself).
+#[test]
+fn smoothing_detours_around_a_graze_next_to_the_goal() {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    let space = square();
+    let limits = limits2();
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.3]],
+    };
+    let r = 0.01;
+    let goal = path.states[1].clone();
+    let mut verified = Record::default();
+    Trajectory::rest_to_rest(&space, &path, &limits)
+        .unwrap()
+        .check(&space, &mut verified, r)
+        .unwrap();
+    let mut edge = Record::default();
+    assert!(MotionValidator::new(space.clone(), r).check_motion(&mut edge, &path.states[0], &path.states[1]));
+    // The verification sample nearest the goal that no edge check sampled.
+    let pin = verified
+        .0
+        .iter()
+        .filter(|q| space.distance(q, &goal) > 1e-9)
+        .filter(|q| edge.0.iter().all(|p| space.distance(p, q) > 1e-9))
+        .min_by(|a, b| space.distance(a, &goal).total_cmp(&space.distance(b, &goal)))
+        .expect("the two sample sets differ")
+        .clone();
+    assert!(
+        space.distance(&pin, &goal) < 0.25 * r,
+        "the pinned state should sit next to the goal: {pin:?}"
+    );
+    let settings = ShortcutSettings {
+        fine_resolution: Some(r),
+        verify_resolution: Some(r),
+        ..Default::default()
+    };
+    for smoothing in [Smoothing::None, Smoothing::Parabolic] {
+        let mut motion = MotionValidator::new(space.clone(), 0.02);
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut validator = Pin {
+            at: pin.clone(),
+            checks: 0,
+        };
+        let out = smooth(
+            smoothing,
+            &mut motion,
+            &mut validator,
+            &path,
+            &limits,
+            &settings,
+            std::time::Duration::from_secs(1),
+            &mut rng,
+        )
+        .unwrap_or_else(|e| panic!("{smoothing:?}: {e}"));
+        assert!(
+            out.fell_back,
+            "{smoothing:?}: the straight edge should have failed verification"
+        );
+        assert_eq!(out.path.states.last(), Some(&goal), "{smoothing:?}: the goal moved");
+        assert!(out.trajectory.check(&space, &mut validator, r).is_ok());
+    }
+}
