@@ -593,33 +593,45 @@ pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize
         return None;
     }
     let state = |i: usize| &flat[i * dim..(i + 1) * dim];
-    // Checking order: midpoints coarse to fine, then the two ends.
-    let mut order = Vec::with_capacity(n);
-    let mut queue = std::collections::VecDeque::with_capacity(64);
-    queue.push_back((0usize, n - 1));
-    while let Some((lo, hi)) = queue.pop_front() {
-        if hi - lo < 2 {
-            continue;
-        }
-        let mid = lo + (hi - lo) / 2;
-        order.push(mid);
-        queue.push_back((lo, mid));
-        queue.push_back((mid, hi));
-    }
-    order.push(n - 1);
-    if n > 1 {
-        order.push(0);
-    }
-    // A few states at a time, so the validator can compute them together.
-    let mut batch = Vec::with_capacity(crate::motion::BATCH * dim);
-    for group in order.chunks(crate::motion::BATCH) {
+    // Checking order: midpoints coarse to fine, then the two ends, handed to the validator a
+    // few states at a time so that it can compute them together.
+    const BATCH: usize = crate::motion::BATCH;
+    let mut group = [0usize; BATCH];
+    let mut len = 0;
+    let mut batch = Vec::with_capacity(BATCH * dim);
+    let mut flush = |group: &[usize], batch: &mut Vec<f64>| {
         batch.clear();
         for &i in group {
             batch.extend_from_slice(state(i));
         }
-        if let Some(k) = validator.first_invalid(&batch, dim) {
-            return Some(group[k]);
+        validator.first_invalid(batch, dim).map(|k| group[k])
+    };
+    let mut queue = std::collections::VecDeque::with_capacity(64);
+    queue.push_back((0usize, n - 1));
+    let mids = std::iter::from_fn(|| {
+        while let Some((lo, hi)) = queue.pop_front() {
+            if hi - lo >= 2 {
+                let mid = lo + (hi - lo) / 2;
+                queue.push_back((lo, mid));
+                queue.push_back((mid, hi));
+                return Some(mid);
+            }
         }
+        None
+    });
+    let ends = [n - 1, 0];
+    for i in mids.chain(ends.into_iter().take(n.min(2))) {
+        group[len] = i;
+        len += 1;
+        if len == BATCH {
+            if let Some(bad) = flush(&group, &mut batch) {
+                return Some(bad);
+            }
+            len = 0;
+        }
+    }
+    if len > 0 {
+        return flush(&group[..len], &mut batch);
     }
     None
 }
