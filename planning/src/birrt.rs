@@ -46,11 +46,12 @@ use crate::validity::StateValidator;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct BiRrt {
-    /// Longest step; `None` is a quarter of [`default_range`](crate::planner::default_range)
-    /// (0.05 × the space's extent, ≈ 0.65 rad for the Panda). OMPL's default, 0.2 × the
-    /// extent, made each extension check up to ~120 states on MotionBenchMaker problems and
-    /// cost success; 0.02 × the extent was slower on the Panda's box and table families
-    /// (`docs/benchmarks.md`).
+    /// Longest step; `None` is a tenth of [`default_range`](crate::planner::default_range)
+    /// (0.02 × the space's extent, ≈ 0.26 rad for the Panda and the Fetch), the step the
+    /// skills were validated with. OMPL's default, 0.2 × the extent, made each extension check
+    /// up to ~120 states on MotionBenchMaker problems and cost success. Longer steps suit some
+    /// problem sets: `hearth bench plan` takes 0.65 rad for the Panda and 1.2 rad for the
+    /// Fetch (`docs/benchmarks.md`).
     pub range: Option<f64>,
     /// Dynamic-domain sampling (Yershova, Jaillet, Siméon & LaValle, ICRA 2005): a state whose
     /// extension failed only accepts samples within its domain radius afterwards, so states
@@ -132,7 +133,7 @@ impl Default for DynamicDomain {
 }
 
 /// [`BiRrt`]'s default step as a fraction of [`default_range`](crate::planner::default_range).
-const BIRRT_RANGE_SCALE: f64 = 0.25;
+const BIRRT_RANGE_SCALE: f64 = 0.1;
 
 /// One tree of the search with each state's dynamic-domain radius.
 struct Grown {

@@ -65,8 +65,8 @@ pub struct BenchPlanArgs {
     /// `--resolution` (a larger value is lowered to that).
     #[arg(long, default_value_t = 0.002)]
     fine_resolution: f64,
-    /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch and its own
-    /// default otherwise (0.05 × the space's extent, ≈ 0.65 rad for the Panda); RRT and LazyPRM
+    /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch, 0.65 rad
+    /// for the Panda and its own default otherwise (0.02 × the space's extent); RRT and LazyPRM
     /// their default (0.2 × the extent, as OMPL). See `docs/benchmarks.md`.
     #[arg(long)]
     range: Option<f64>,
@@ -112,12 +112,16 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
         .collect()
 }
 
-/// BiRRT's step for a robot when `--range` is not given: the Fetch's torso + arm problems are
-/// solved more often with 1.2 rad than with the planner's 0.26 rad default (94.0 % against
-/// 82.8 % of MotionBenchMaker's Fetch problems in 1 s, `docs/benchmarks.md`); the Panda does
-/// best with the default.
+/// BiRRT's step for a robot when `--range` is not given, measured on MotionBenchMaker
+/// (`docs/benchmarks.md`): the Fetch's torso + arm problems are solved more often with 1.2 rad
+/// than with the planner's 0.26 rad default (94.0 % against 82.8 % in 1 s); the Panda's are
+/// solved fastest overall with 0.65 rad. Other robots take the planner's default.
 fn birrt_step(robot: &str) -> Option<f64> {
-    (robot == "fetch").then_some(1.2)
+    match robot {
+        "fetch" => Some(1.2),
+        "panda" => Some(0.65),
+        _ => None,
+    }
 }
 
 /// Whether problem `id` of `family` passes the selectors (all pass when there are none).
