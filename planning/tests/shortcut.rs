@@ -544,49 +544,57 @@ impl StateValidator for Record {
     }
 }
 
-#[test]
-fn smoothing_detours_around_a_graze_only_the_verification_samples() {
-    use hearth_planning::shortcut::{Smoothing, smooth};
-    let space = square();
-    let limits = limits2();
+/// The straight 2-D edge of the graze tests, and the states its verification at spacing
+/// `GRAZE_R` samples farther than 10⁻⁴ from every state its edge check at the same spacing
+/// samples.
+fn graze_edge() -> (Path, Vec<Vec<f64>>) {
+    let (space, limits) = (square(), limits2());
     let path = Path {
         states: vec![vec![0.1, 0.1], vec![0.9, 0.3]],
     };
-    let r = 0.01;
-    // A state the verification samples on the edge, far from every state the edge check at the
-    // same spacing samples.
     let mut verified = Record::default();
     Trajectory::rest_to_rest(&space, &path, &limits)
         .unwrap()
-        .check(&space, &mut verified, r)
+        .check(&space, &mut verified, GRAZE_R)
         .unwrap();
     let mut edge = Record::default();
-    assert!(MotionValidator::new(space.clone(), r).check_motion(&mut edge, &path.states[0], &path.states[1]));
-    let pin = verified
+    assert!(MotionValidator::new(space.clone(), GRAZE_R).check_motion(&mut edge, &path.states[0], &path.states[1]));
+    let unsampled = verified
         .0
-        .iter()
-        .filter(|q| (0.3..0.7).contains(&q[0]))
-        .find(|q| edge.0.iter().all(|p| space.distance(p, q) > 1e-4))
-        .expect("the two sample sets differ")
-        .clone();
+        .into_iter()
+        .filter(|q| edge.0.iter().all(|p| space.distance(p, q) > 1e-4))
+        .collect();
+    (path, unsampled)
+}
+
+/// Spacing of the repair and the final check in the graze tests.
+const GRAZE_R: f64 = 0.01;
+
+/// `path` smoothed (without shortcuts, then with parabolic ones) against a single colliding
+/// point `pin` that only the final check samples: each run must fall back, and what it returns
+/// must pass the final check. Returns the re-planned paths.
+fn smooth_around_pin(path: &Path, pin: &[f64]) -> Vec<Path> {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    let space = square();
     let settings = ShortcutSettings {
-        fine_resolution: Some(r),
-        verify_resolution: Some(r),
+        fine_resolution: Some(GRAZE_R),
+        verify_resolution: Some(GRAZE_R),
         ..Default::default()
     };
+    let mut paths = Vec::new();
     for smoothing in [Smoothing::None, Smoothing::Parabolic] {
         let mut motion = MotionValidator::new(space.clone(), 0.02);
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let mut validator = Pin {
-            at: pin.clone(),
+            at: pin.to_vec(),
             checks: 0,
         };
         let out = smooth(
             smoothing,
             &mut motion,
             &mut validator,
-            &path,
-            &limits,
+            path,
+            &limits2(),
             &settings,
             std::time::Duration::from_secs(1),
             &mut rng,
@@ -596,8 +604,23 @@ fn smoothing_detours_around_a_graze_only_the_verification_samples() {
             out.fell_back,
             "{smoothing:?}: the straight edge should have failed verification"
         );
-        assert!(out.path.states.len() > 2, "{smoothing:?}: the edge was not re-planned");
-        assert!(out.trajectory.check(&space, &mut validator, r).is_ok());
+        assert!(out.trajectory.check(&space, &mut validator, GRAZE_R).is_ok());
+        paths.push(out.path);
+    }
+    paths
+}
+
+#[test]
+fn smoothing_detours_around_a_graze_only_the_verification_samples() {
+    let (path, unsampled) = graze_edge();
+    // A state the verification samples in the middle of the edge, far from every state the
+    // edge check samples.
+    let pin = unsampled
+        .iter()
+        .find(|q| (0.3..0.7).contains(&q[0]))
+        .expect("the two sample sets differ");
+    for out in smooth_around_pin(&path, pin) {
+        assert!(out.states.len() > 2, "the edge was not re-planned");
     }
 }
 
@@ -605,62 +628,21 @@ fn smoothing_detours_around_a_graze_only_the_verification_samples() {
 /// side away from the colliding state (the avoided ball contains the goal itself).
 #[test]
 fn smoothing_detours_around_a_graze_next_to_the_goal() {
-    use hearth_planning::shortcut::{Smoothing, smooth};
+    let (path, unsampled) = graze_edge();
     let space = square();
-    let limits = limits2();
-    let path = Path {
-        states: vec![vec![0.1, 0.1], vec![0.9, 0.3]],
-    };
-    let r = 0.01;
     let goal = path.states[1].clone();
-    let mut verified = Record::default();
-    Trajectory::rest_to_rest(&space, &path, &limits)
-        .unwrap()
-        .check(&space, &mut verified, r)
-        .unwrap();
-    let mut edge = Record::default();
-    assert!(MotionValidator::new(space.clone(), r).check_motion(&mut edge, &path.states[0], &path.states[1]));
-    // The verification sample nearest the goal that no edge check sampled.
-    let pin = verified
-        .0
+    // The verification sample nearest the goal (the goal itself excepted) that no edge check
+    // sampled.
+    let pin = unsampled
         .iter()
         .filter(|q| space.distance(q, &goal) > 1e-9)
-        .filter(|q| edge.0.iter().all(|p| space.distance(p, q) > 1e-9))
         .min_by(|a, b| space.distance(a, &goal).total_cmp(&space.distance(b, &goal)))
-        .expect("the two sample sets differ")
-        .clone();
+        .expect("the two sample sets differ");
     assert!(
-        space.distance(&pin, &goal) < 0.25 * r,
+        space.distance(pin, &goal) < 0.25 * GRAZE_R,
         "the pinned state should sit next to the goal: {pin:?}"
     );
-    let settings = ShortcutSettings {
-        fine_resolution: Some(r),
-        verify_resolution: Some(r),
-        ..Default::default()
-    };
-    for smoothing in [Smoothing::None, Smoothing::Parabolic] {
-        let mut motion = MotionValidator::new(space.clone(), 0.02);
-        let mut rng = Pcg64Mcg::seed_from_u64(3);
-        let mut validator = Pin {
-            at: pin.clone(),
-            checks: 0,
-        };
-        let out = smooth(
-            smoothing,
-            &mut motion,
-            &mut validator,
-            &path,
-            &limits,
-            &settings,
-            std::time::Duration::from_secs(1),
-            &mut rng,
-        )
-        .unwrap_or_else(|e| panic!("{smoothing:?}: {e}"));
-        assert!(
-            out.fell_back,
-            "{smoothing:?}: the straight edge should have failed verification"
-        );
-        assert_eq!(out.path.states.last(), Some(&goal), "{smoothing:?}: the goal moved");
-        assert!(out.trajectory.check(&space, &mut validator, r).is_ok());
+    for out in smooth_around_pin(&path, pin) {
+        assert_eq!(out.states.last(), Some(&goal), "the goal moved");
     }
 }
