@@ -73,13 +73,19 @@ impl FkOp {
     /// The child's pose relative to its parent link for configuration `q`.
     #[inline(always)]
     pub(crate) fn local(&self, q: &[f64]) -> Isometry3<f64> {
-        let v = match self.motion {
-            Motion::Fixed => 0.0,
+        self.local_at::<f64>(self.var().map_or(0.0, |v| q[v]), sin_cos)
+            .to_isometry()
+    }
+
+    /// The configuration variable the joint reads (`None` for a fixed joint).
+    #[inline(always)]
+    fn var(&self) -> Option<usize> {
+        match self.motion {
+            Motion::Fixed => None,
             Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
-                q[var as usize]
+                Some(var as usize)
             }
-        };
-        self.local_at::<f64>(v, sin_cos).to_isometry()
+        }
     }
 
     /// The child's pose relative to its parent for joint value `v` (ignored by fixed joints),
@@ -317,12 +323,7 @@ impl FkProgram {
             } else {
                 PoseLanes::splat(&poses[op.parent as usize])
             };
-            let v = match op.motion {
-                Motion::Fixed => 0.0,
-                Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
-                    q[var as usize]
-                }
-            };
+            let v = op.var().map_or(0.0, |v| q[v]);
             let pose = parent.then(&op.local_at(v, sin_cos));
             poses[op.child as usize] = pose.to_isometry();
             prev = pose;
@@ -342,13 +343,7 @@ impl FkProgram {
             } else {
                 PoseLanes::gather([&poses[0][p], &poses[1][p], &poses[2][p], &poses[3][p]])
             };
-            let v = match op.motion {
-                Motion::Fixed => f64x4::splat(0.0),
-                Motion::RevoluteAxis { var, .. } | Motion::Revolute { var, .. } | Motion::Prismatic { var, .. } => {
-                    let v = var as usize;
-                    f64x4::new([q[0][v], q[1][v], q[2][v], q[3][v]])
-                }
-            };
+            let v = op.var().map_or(f64x4::splat(0.0), |v| f64x4::new(q.map(|q| q[v])));
             let pose = parent.then(&op.local_at(v, sin_cos4));
             for (k, buf) in poses.iter_mut().enumerate() {
                 buf[op.child as usize] = pose.lane(k).to_isometry();

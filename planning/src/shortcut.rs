@@ -486,15 +486,19 @@ struct Avoiding<'a, S, V: ?Sized> {
     avoid: &'a [f64],
     radius: f64,
     keep: [&'a [f64]; 2],
+    /// Whether each end of `keep` lies inside the avoided ball.
+    inside: [bool; 2],
 }
 
 impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V> {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         let d = self.space.distance(q, self.avoid);
         let allowed = d > self.radius
-            || self.keep.iter().any(|&end| {
-                end == q || (self.space.distance(end, self.avoid) <= self.radius && self.space.distance(q, end) < d)
-            });
+            || self
+                .keep
+                .iter()
+                .zip(self.inside)
+                .any(|(&end, inside)| end == q || (inside && self.space.distance(q, end) < d));
         allowed && self.inner.is_valid(q)
     }
 
@@ -531,13 +535,15 @@ fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     while to < last && space.distance(&states[to], bad) <= radius {
         to += 1;
     }
-    let ends = space.distance(&states[from], bad).min(space.distance(&states[to], bad));
+    let end_gaps = [space.distance(&states[from], bad), space.distance(&states[to], bad)];
+    let radius = radius.min(0.5 * end_gaps[0].min(end_gaps[1])).max(0.75 * resolution);
     let mut avoiding = Avoiding {
         space,
         inner: validator,
         avoid: bad,
-        radius: radius.min(0.5 * ends).max(0.75 * resolution),
+        radius,
         keep: [&states[from], &states[to]],
+        inside: end_gaps.map(|g| g <= radius),
     };
     let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
     let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);

@@ -446,10 +446,8 @@ impl RobotValidity {
     /// cannot be used for them (the caller checks them one by one).
     fn first_invalid4(&mut self, states: &[f64], dim: usize) -> Option<Option<usize>> {
         let n = states.len() / dim;
-        if !(2..=4).contains(&n) || dim != self.chain.dof() || !states.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        if !self.fixed_poses_current {
+        // (A non-finite value makes `fk_update4` fail, which also sends the states one by one.)
+        if !(2..=4).contains(&n) || dim != self.chain.dof() || !self.fixed_poses_current {
             return None;
         }
         if !self.lanes_current {

@@ -594,17 +594,16 @@ pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize
     }
     let state = |i: usize| &flat[i * dim..(i + 1) * dim];
     // Checking order: midpoints coarse to fine, then the two ends, handed to the validator a
-    // few states at a time so that it can compute them together.
+    // few states at a time so that it can compute them together. The group's states are
+    // copied into a buffer on the stack (on the heap only for spaces of over 32 dimensions).
     const BATCH: usize = crate::motion::BATCH;
-    let mut group = [0usize; BATCH];
-    let mut len = 0;
-    let mut batch = Vec::with_capacity(BATCH * dim);
-    let mut flush = |group: &[usize], batch: &mut Vec<f64>| {
-        batch.clear();
-        for &i in group {
-            batch.extend_from_slice(state(i));
-        }
-        validator.first_invalid(batch, dim).map(|k| group[k])
+    let mut stack = [0.0; BATCH * 32];
+    let mut heap = Vec::new();
+    let buf = if BATCH * dim <= stack.len() {
+        &mut stack[..BATCH * dim]
+    } else {
+        heap.resize(BATCH * dim, 0.0);
+        &mut heap[..]
     };
     let mut queue = std::collections::VecDeque::with_capacity(64);
     queue.push_back((0usize, n - 1));
@@ -619,19 +618,21 @@ pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize
         }
         None
     });
-    let ends = [n - 1, 0];
-    for i in mids.chain(ends.into_iter().take(n.min(2))) {
+    let mut group = [0usize; BATCH];
+    let mut len = 0;
+    for i in mids.chain([n - 1, 0].into_iter().take(n.min(2))) {
+        buf[len * dim..(len + 1) * dim].copy_from_slice(state(i));
         group[len] = i;
         len += 1;
         if len == BATCH {
-            if let Some(bad) = flush(&group, &mut batch) {
-                return Some(bad);
+            if let Some(k) = validator.first_invalid(buf, dim) {
+                return Some(group[k]);
             }
             len = 0;
         }
     }
-    if len > 0 {
-        return flush(&group[..len], &mut batch);
+    if len == 0 {
+        return None;
     }
-    None
+    validator.first_invalid(&buf[..len * dim], dim).map(|k| group[k])
 }
