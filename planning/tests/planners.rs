@@ -540,6 +540,24 @@ fn bad_input_is_named() {
         ..Default::default()
     });
     assert!(bad(prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    for (enhance, radius, needle) in [
+        (1.5, None, "enhance is 1.5"),
+        (f64::NAN, None, "enhance is NaN"),
+        (0.5, Some(0.0), "enhance_radius is 0"),
+        (0.5, Some(f64::INFINITY), "enhance_radius is inf"),
+    ] {
+        let mut prm = LazyPrm::new(LazyPrmSettings {
+            enhance,
+            enhance_radius: radius,
+            ..Default::default()
+        });
+        let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::BadInput(m) if m.contains(needle)),
+            "{needle}: {e}"
+        );
+        assert_eq!(prm.roadmap_size(), 0, "bad settings leave the roadmap untouched");
+    }
 }
 
 #[test]
@@ -829,4 +847,62 @@ fn panda_shelf_every_planner() {
         &request,
         &budget(100_000),
     );
+}
+
+/// A slot x ∈ [0.7, 1.0], y ∈ [0.495, 0.505] cut into a block x ∈ [0.7, 1.0], y ∈ [0.3, 0.7],
+/// open on the left.
+#[derive(Default)]
+struct Slot {
+    checks: u64,
+}
+
+impl StateValidator for Slot {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        let in_block = (0.7..=1.0).contains(&q[0]) && (0.3..=0.7).contains(&q[1]);
+        !in_block || (0.495..=0.505).contains(&q[1])
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+}
+
+#[test]
+fn lazy_prm_node_enhancement_reaches_a_goal_in_a_slot() {
+    // The goal sits at the bottom of the slot; its roadmap edges to uniform samples all cross
+    // the block, so it needs samples near it, which node enhancement puts there.
+    let request = PlanRequest::new(vec![0.1, 0.5], Goal::Config(vec![0.97, 0.5]));
+    let (space, res) = (square(), PASSAGE_RESOLUTION);
+    let b = budget(1_500);
+    let mut v = Slot::default();
+    let with = |enhance: f64| {
+        move || {
+            LazyPrm::new(LazyPrmSettings {
+                enhance,
+                ..Default::default()
+            })
+        }
+    };
+    let uniform = success_rate(
+        "slot/lazy_prm uniform",
+        with(0.0),
+        &space,
+        res,
+        &mut v,
+        &request,
+        &b,
+        20,
+    );
+    let enhanced = success_rate(
+        "slot/lazy_prm enhanced",
+        with(0.5),
+        &space,
+        res,
+        &mut v,
+        &request,
+        &b,
+        20,
+    );
+    assert!(enhanced >= 0.8, "enhanced: {enhanced}");
+    assert!(enhanced >= uniform + 0.25, "enhanced {enhanced}, uniform {uniform}");
 }
