@@ -19,6 +19,15 @@ fn joint_space() -> JointSpace {
     .unwrap()
 }
 
+/// Bounded joints only: a weighted Euclidean metric, indexed by k-d trees. One weight is 0
+/// (a joint that does not count) and the bounds are far apart, so cells are long and thin.
+fn euclidean_space() -> JointSpace {
+    JointSpace::new(&[-1.0, 0.0, -3.0, -0.1, -2.0], &[1.0, 0.5, 3.0, 0.1, 0.5], &[false; 5])
+        .unwrap()
+        .with_weights(&[1.0, 0.0, 1.3, 2.0, 0.4])
+        .unwrap()
+}
+
 fn se2_space() -> Se2Space {
     Se2Space::new([-2.0, -2.0], [2.0, 2.0]).unwrap()
 }
@@ -64,6 +73,12 @@ proptest! {
     }
 
     #[test]
+    fn euclidean_joint_space(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
+        prop_assert!(euclidean_space().euclidean_weights().is_some());
+        agrees_with_brute_force(&euclidean_space(), seed, n, remove, k, 1.0);
+    }
+
+    #[test]
     fn se2_space_with_wrapping_yaw(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
         agrees_with_brute_force(&se2_space(), seed, n, remove, k, 0.8);
     }
@@ -85,10 +100,12 @@ fn wraps_through_pi() {
     assert_eq!(nn.nearest(&space, &[0.0, 0.0, 0.0]), None);
 }
 
-/// A space that counts its distance evaluations.
+/// A space that counts its distance evaluations; it declares its metric Euclidean (so the
+/// index builds k-d trees) only when `euclidean` is set.
 struct Counting {
     inner: JointSpace,
     calls: std::sync::atomic::AtomicU64,
+    euclidean: bool,
 }
 
 impl Space for Counting {
@@ -126,6 +143,58 @@ impl Space for Counting {
     fn coordinate_name(&self, i: usize) -> Option<&str> {
         self.inner.coordinate_name(i)
     }
+    fn euclidean_weights(&self) -> Option<&[f64]> {
+        if self.euclidean {
+            self.inner.euclidean_weights()
+        } else {
+            None
+        }
+    }
+}
+
+/// Distance evaluations per nearest query among `n` states inserted with interleaved
+/// queries, as in a tree planner.
+fn evaluations_per_query(space: &Counting, n: usize) -> u64 {
+    let mut rng = Pcg64Mcg::seed_from_u64(9);
+    let dim = space.dim();
+    let mut nn = NearestNeighbors::new(dim);
+    let mut q = vec![0.0; dim];
+    for _ in 0..n {
+        space.sample(&mut rng, &mut q);
+        nn.insert(&q);
+        nn.nearest(space, &q);
+    }
+    let before = space.calls.load(std::sync::atomic::Ordering::Relaxed);
+    let queries = 100;
+    for _ in 0..queries {
+        space.sample(&mut rng, &mut q);
+        nn.nearest(space, &q);
+    }
+    (space.calls.load(std::sync::atomic::Ordering::Relaxed) - before) / queries
+}
+
+#[test]
+fn k_d_trees_prune_better_than_vantage_points_in_seven_dimensions() {
+    // A Panda-like space: seven bounded joints.
+    let joints = || {
+        JointSpace::new(
+            &[-2.9, -1.76, -2.9, -3.07, -2.9, -0.02, -2.9],
+            &[2.9, 1.76, 2.9, -0.07, 2.9, 3.75, 2.9],
+            &[false; 7],
+        )
+        .unwrap()
+    };
+    let count = |euclidean| {
+        let space = Counting {
+            inner: joints(),
+            calls: Default::default(),
+            euclidean,
+        };
+        evaluations_per_query(&space, 20_000)
+    };
+    let (kd, vp) = (count(true), count(false));
+    println!("nearest among 20000 seven-dimensional states: k-d {kd}, vantage points {vp} distance evaluations");
+    assert!(kd * 2 < vp, "k-d {kd}, vantage points {vp}");
 }
 
 #[test]
@@ -133,6 +202,7 @@ fn queries_are_not_a_linear_scan() {
     let space = Counting {
         inner: JointSpace::new(&[0.0, 0.0, 0.0], &[1.0, 1.0, 0.0], &[false, false, true]).unwrap(),
         calls: Default::default(),
+        euclidean: false,
     };
     let mut rng = Pcg64Mcg::seed_from_u64(9);
     let mut nn = NearestNeighbors::new(3);
@@ -155,4 +225,48 @@ fn queries_are_not_a_linear_scan() {
         "{per_query} distance evaluations per query among {n} states"
     );
     println!("{per_query} distance evaluations per nearest query among {n} states");
+}
+
+/// Interleaved inserts and queries, as in a tree planner, so that trees are merged many times
+/// (the logarithmic method rebuilds at query time); clustered states, as a planner's are.
+/// Every 25th query is compared with a brute-force scan.
+fn interleaved_agrees_with_brute_force<S: Space>(space: &S, n: usize) {
+    let dim = space.dim();
+    let mut nn = NearestNeighbors::new(dim);
+    let mut rng = Pcg64Mcg::seed_from_u64(3);
+    let (mut q, mut near) = (vec![0.0; dim], vec![0.0; dim]);
+    let mut states: Vec<Vec<f64>> = Vec::new();
+    for i in 0..n {
+        space.sample(&mut rng, &mut q);
+        if i % 3 == 0 && !states.is_empty() {
+            // A state near an earlier one.
+            let t: f64 = rand::RngExt::random(&mut rng);
+            near.copy_from_slice(&q);
+            space.interpolate(&states[i % states.len()], &near, 0.05 * t, &mut q);
+        }
+        let found = nn.k_nearest(space, &q, 11);
+        if i % 25 == 0 {
+            let mut scan: Vec<(f64, usize)> = states
+                .iter()
+                .enumerate()
+                .map(|(j, p)| (space.distance(&q, p), j))
+                .collect();
+            scan.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let expected: Vec<usize> = scan.iter().take(11).map(|e| e.1).collect();
+            assert_eq!(found, expected, "query {i}");
+        }
+        assert_eq!(nn.insert(&q), i);
+        states.push(q.clone());
+    }
+    assert_eq!(nn.len(), n);
+}
+
+#[test]
+fn no_state_is_lost_when_trees_merge() {
+    // Vantage-point trees (a wrapping joint) and k-d trees (bounded joints only).
+    interleaved_agrees_with_brute_force(&joint_space(), 6_000);
+    let bounded = JointSpace::new(&[0.0; 7], &[1.0; 7], &[false; 7]).unwrap();
+    assert!(bounded.euclidean_weights().is_some());
+    interleaved_agrees_with_brute_force(&bounded, 6_000);
+    interleaved_agrees_with_brute_force(&se2_space(), 3_000);
 }

@@ -282,4 +282,8 @@ impl Space for JointSpace {
     fn coordinate_name(&self, i: usize) -> Option<&str> {
         self.names.get(i).map(String::as_str)
     }
+
+    fn euclidean_weights(&self) -> Option<&[f64]> {
+        (!self.continuous.contains(&true)).then_some(&self.weights[..])
+    }
 }

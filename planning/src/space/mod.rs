@@ -107,6 +107,24 @@ pub trait Space: Send + Sync {
 
     /// The name of coordinate `i` (a joint name, `x`, `y`, `yaw`), or `None` past the end.
     fn coordinate_name(&self, i: usize) -> Option<&str>;
+
+    /// `Some(w)` when [`Space::distance`] is exactly the weighted Euclidean distance
+    /// `√Σ (wᵢ (aᵢ − bᵢ))²`, with no wrapping coordinate: nearest-neighbour search then uses
+    /// k-d trees. The default, `None`, makes no such promise (the search then relies on the
+    /// triangle inequality only).
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let bounded = JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false])?;
+    /// assert_eq!(bounded.euclidean_weights(), Some(&[1.0, 1.0][..]));
+    /// let wrapping = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// assert_eq!(wrapping.euclidean_weights(), None);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    fn euclidean_weights(&self) -> Option<&[f64]> {
+        None
+    }
 }
 
 /// What is wrong with a state, or with the description of a space.
