@@ -1,7 +1,10 @@
 //! BiRRT, RRT and LazyPRM on a fixed subset of MotionBenchMaker problems (the Panda
 //! table_pick problems in `planning/tests/data`, fingers at 0.04 m), and the smoothing
 //! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths.
-//! Each plan uses the same seed, so every iteration plans the same path.
+//! Each plan uses the same seed, so every iteration plans the same path. `nn/…` times one
+//! nearest-neighbour query among 20,000 random Panda configurations, with k-d trees (the Panda's
+//! bounded joints) and with vantage-point trees (the same space with its first joint made
+//! continuous, which k-d trees cannot index).
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -127,5 +130,43 @@ fn planners(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, planners);
+fn nearest_neighbours(c: &mut Criterion) {
+    use hearth_planning::nn::NearestNeighbors;
+    use hearth_planning::space::Space;
+    let (lower, upper) = (
+        [-2.9, -1.76, -2.9, -3.07, -2.9, -0.02, -2.9],
+        [2.9, 1.76, 2.9, -0.07, 2.9, 3.75, 2.9],
+    );
+    let mut continuous = [false; 7];
+    let kd = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
+    continuous[0] = true;
+    let vp = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
+    let mut g = c.benchmark_group("nn");
+    for (name, space) in [("nearest_20k_kd", kd), ("nearest_20k_vp", vp)] {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
+        let mut nn = NearestNeighbors::new(7);
+        let mut q = [0.0; 7];
+        for _ in 0..20_000 {
+            space.sample(&mut rng, &mut q);
+            nn.insert(&q);
+            nn.nearest(&space, &q);
+        }
+        let queries: Vec<[f64; 7]> = (0..256)
+            .map(|_| {
+                space.sample(&mut rng, &mut q);
+                q
+            })
+            .collect();
+        let mut i = 0;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                i = (i + 1) % queries.len();
+                black_box(nn.nearest(&space, &queries[i]))
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, planners, nearest_neighbours);
 criterion_main!(benches);
