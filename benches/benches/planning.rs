@@ -2,9 +2,9 @@
 //! table_pick problems in `planning/tests/data`, fingers at 0.04 m), and the smoothing
 //! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths.
 //! Each plan uses the same seed, so every iteration plans the same path. `nn/…` times one
-//! nearest-neighbour query among 20,000 random Panda configurations, with k-d trees (the Panda's
-//! bounded joints) and with vantage-point trees (the same space with its first joint made
-//! continuous, which k-d trees cannot index).
+//! nearest-neighbour query (and one query for the 10 nearest) among 20,000 random Panda
+//! configurations, with k-d trees (the Panda's bounded joints) and with vantage-point trees
+//! (the same space with its first joint made continuous, which k-d trees cannot index).
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -162,6 +162,12 @@ fn nearest_neighbours(c: &mut Criterion) {
             b.iter(|| {
                 i = (i + 1) % queries.len();
                 black_box(nn.nearest(&space, &queries[i]))
+            })
+        });
+        g.bench_function(name.replace("nearest", "k10"), |b| {
+            b.iter(|| {
+                i = (i + 1) % queries.len();
+                black_box(nn.k_nearest(&space, &queries[i], 10))
             })
         });
     }

@@ -540,15 +540,18 @@ fn bad_input_is_named() {
         ..Default::default()
     });
     assert!(bad(prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
-    for (enhance, radius, needle) in [
-        (1.5, None, "enhance is 1.5"),
-        (f64::NAN, None, "enhance is NaN"),
-        (0.5, Some(0.0), "enhance_radius is 0"),
-        (0.5, Some(f64::INFINITY), "enhance_radius is inf"),
+    for (enhance, radius, weight, needle) in [
+        (1.5, None, 1.5, "enhance is 1.5"),
+        (f64::NAN, None, 1.5, "enhance is NaN"),
+        (0.5, Some(0.0), 1.5, "enhance_radius is 0"),
+        (0.5, Some(f64::INFINITY), 1.5, "enhance_radius is inf"),
+        (0.5, None, 0.5, "search_weight is 0.5"),
+        (0.5, None, f64::NAN, "search_weight is NaN"),
     ] {
         let mut prm = LazyPrm::new(LazyPrmSettings {
             enhance,
             enhance_radius: radius,
+            search_weight: weight,
             ..Default::default()
         });
         let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
