@@ -163,8 +163,8 @@ impl NearestNeighbors {
         }
         for t in &self.trees {
             match t {
-                Tree::Vp(t) => t.search(space, &self.states, self.dim, &self.removed, q, c),
-                Tree::Kd(t) => t.search(space, &self.states, self.dim, &self.removed, q, c),
+                Tree::Vp(t) => t.search(space, self, q, c),
+                Tree::Kd(t) => t.search(space, self, q, c),
             }
         }
     }
@@ -370,22 +370,15 @@ impl VpTree {
         index
     }
 
-    fn search<S: Space, C: Collector>(
-        &self,
-        space: &S,
-        states: &[f64],
-        dim: usize,
-        removed: &[bool],
-        q: &[f64],
-        c: &mut C,
-    ) {
+    /// Offers `c` the live states of this tree that may be within its radius of `q`.
+    fn search<S: Space, C: Collector>(&self, space: &S, index: &NearestNeighbors, q: &[f64], c: &mut C) {
         // Nodes to visit with a lower bound on the distance from `q` to any of their states,
         // on the stack frame: each visited inner node replaces itself with its two children, so
         // the stack never holds more than the tree's height + 1 entries, and each child has at
         // most half its parent's states, so the height is at most 33 for u32 ids.
         let mut stack = [(0u32, 0.0f64); STACK];
         let mut top = 1usize;
-        let state = |i: u32| &states[i as usize * dim..(i as usize + 1) * dim];
+        let state = |i: u32| index.state(i as usize);
         while top > 0 {
             top -= 1;
             let (n, bound) = stack[top];
@@ -395,7 +388,7 @@ impl VpTree {
             match self.nodes[n as usize] {
                 Node::Leaf { start, end } => {
                     for &id in &self.ids[start as usize..end as usize] {
-                        if !removed[id as usize] {
+                        if !index.is_removed(id as usize) {
                             c.offer(space.distance(q, state(id)), id);
                         }
                     }
@@ -407,7 +400,7 @@ impl VpTree {
                     outside,
                 } => {
                     let d = space.distance(q, state(vp));
-                    if !removed[vp as usize] {
+                    if !index.is_removed(vp as usize) {
                         c.offer(d, vp);
                     }
                     // Inside states p have d(p, vp) ≤ mu, so d(q, p) ≥ d - mu; outside ones have
@@ -526,24 +519,15 @@ impl KdTree {
         index
     }
 
-    fn search<S: Space, C: Collector>(
-        &self,
-        space: &S,
-        states: &[f64],
-        dim: usize,
-        removed: &[bool],
-        q: &[f64],
-        c: &mut C,
-    ) {
+    /// Offers `c` the live states of this tree that may be within its radius of `q`.
+    fn search<S: Space, C: Collector>(&self, space: &S, index: &NearestNeighbors, q: &[f64], c: &mut C) {
         // Per-coordinate weighted offsets from `q` to the current cell (Arya & Mount's
         // incremental distance): the squared bound is their sum of squares.
         let mut offsets = [0.0f64; KD_MAX_DIM];
         let mut search = KdSearch {
             tree: self,
             space,
-            states,
-            dim,
-            removed,
+            index,
             q,
         };
         search.visit(0, 0.0, &mut offsets, c);
@@ -554,9 +538,7 @@ impl KdTree {
 struct KdSearch<'a, S> {
     tree: &'a KdTree,
     space: &'a S,
-    states: &'a [f64],
-    dim: usize,
-    removed: &'a [bool],
+    index: &'a NearestNeighbors,
     q: &'a [f64],
 }
 
@@ -569,9 +551,8 @@ impl<S: Space> KdSearch<'_, S> {
         match self.tree.nodes[n as usize] {
             KdNode::Leaf { start, end } => {
                 for &id in &self.tree.ids[start as usize..end as usize] {
-                    if !self.removed[id as usize] {
-                        let p = &self.states[id as usize * self.dim..(id as usize + 1) * self.dim];
-                        c.offer(self.space.distance(self.q, p), id);
+                    if !self.index.is_removed(id as usize) {
+                        c.offer(self.space.distance(self.q, self.index.state(id as usize)), id);
                     }
                 }
             }

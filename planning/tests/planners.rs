@@ -18,19 +18,27 @@ use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
-/// A wall at x ∈ [0.45, 0.55] with a gap at y ∈ [0.48, 0.52].
-#[derive(Default)]
-struct NarrowPassage {
+/// A 2-D world given by which states are free; it counts its checks.
+struct Region {
+    free: fn(&[f64]) -> bool,
     checks: u64,
 }
 
-impl StateValidator for NarrowPassage {
+impl StateValidator for Region {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
-        !(0.45..=0.55).contains(&q[0]) || (0.48..=0.52).contains(&q[1])
+        (self.free)(q)
     }
     fn checks(&self) -> u64 {
         self.checks
+    }
+}
+
+/// A wall at x ∈ [0.45, 0.55] with a gap at y ∈ [0.48, 0.52].
+fn narrow_passage() -> Region {
+    Region {
+        free: |q| !(0.45..=0.55).contains(&q[0]) || (0.48..=0.52).contains(&q[1]),
+        checks: 0,
     }
 }
 
@@ -195,7 +203,7 @@ fn passage<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P) {
         make,
         &square(),
         PASSAGE_RESOLUTION,
-        &mut NarrowPassage::default(),
+        &mut narrow_passage(),
         &passage_request(),
         &budget(200_000),
     );
@@ -344,7 +352,7 @@ fn any_of_goals_skips_invalid_ones() {
             Rrt::default,
             &square(),
             PASSAGE_RESOLUTION,
-            &mut NarrowPassage::default(),
+            &mut narrow_passage(),
             &request,
             &budget(100_000),
         ),
@@ -353,7 +361,7 @@ fn any_of_goals_skips_invalid_ones() {
             BiRrt::default,
             &square(),
             PASSAGE_RESOLUTION,
-            &mut NarrowPassage::default(),
+            &mut narrow_passage(),
             &request,
             &budget(100_000),
         ),
@@ -362,7 +370,7 @@ fn any_of_goals_skips_invalid_ones() {
             LazyPrm::default,
             &square(),
             PASSAGE_RESOLUTION,
-            &mut NarrowPassage::default(),
+            &mut narrow_passage(),
             &request,
             &budget(100_000),
         ),
@@ -384,13 +392,7 @@ fn birrt_seeds_goal_tree_with_every_valid_goal() {
     let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
     let mut rng = Pcg64Mcg::seed_from_u64(3);
     let s = BiRrt::default()
-        .plan(
-            &mut motion,
-            &mut NarrowPassage::default(),
-            &request,
-            &budget(100_000),
-            &mut rng,
-        )
+        .plan(&mut motion, &mut narrow_passage(), &request, &budget(100_000), &mut rng)
         .unwrap();
     assert_eq!(s.stats.tree_sizes.len(), 2);
     assert!(s.stats.tree_sizes[1] >= 2, "two valid goals seed the goal tree");
@@ -403,7 +405,7 @@ fn lazy_prm_reuses_its_roadmap_and_clears_it() {
         ..Default::default()
     });
     let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
-    let mut v = NarrowPassage::default();
+    let mut v = narrow_passage();
     let mut rng = Pcg64Mcg::seed_from_u64(5);
     let first = prm
         .plan(&mut motion, &mut v, &passage_request(), &budget(200_000), &mut rng)
@@ -430,7 +432,7 @@ fn lazy_prm_reuses_its_roadmap_and_clears_it() {
 fn every_planner(
     request: &PlanRequest,
     budget: &Budget,
-    validator: &mut NarrowPassage,
+    validator: &mut Region,
 ) -> Vec<(&'static str, Result<Solution, PlanError>)> {
     let mut out = Vec::new();
     let mut rng = Pcg64Mcg::seed_from_u64(1);
@@ -451,7 +453,7 @@ fn every_planner(
 }
 
 fn expect_bad_input(request: PlanRequest, budget: Budget, needle: &str) {
-    for (name, r) in every_planner(&request, &budget, &mut NarrowPassage::default()) {
+    for (name, r) in every_planner(&request, &budget, &mut narrow_passage()) {
         match r {
             Err(PlanError::BadInput(m)) => assert!(m.contains(needle), "{name}: `{m}` should name `{needle}`"),
             other => panic!("{name}: expected BadInput({needle}), got {other:?}"),
@@ -488,7 +490,7 @@ fn bad_input_is_named() {
     // Settings.
     let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
     let mut rng = Pcg64Mcg::seed_from_u64(1);
-    let mut v = NarrowPassage::default();
+    let mut v = narrow_passage();
     let r = passage_request();
     let bad = |e: Result<Solution, PlanError>| matches!(e, Err(PlanError::BadInput(_)));
     let rrt = Rrt {
@@ -567,11 +569,11 @@ fn bad_input_is_named() {
 fn invalid_start_and_goals() {
     let in_wall = vec![0.5, 0.1];
     let request = PlanRequest::new(in_wall.clone(), Goal::Config(vec![0.9, 0.9]));
-    for (name, r) in every_planner(&request, &budget(10), &mut NarrowPassage::default()) {
+    for (name, r) in every_planner(&request, &budget(10), &mut narrow_passage()) {
         assert_eq!(r, Err(PlanError::InvalidStart { contact: None }), "{name}");
     }
     let request = PlanRequest::new(vec![0.1, 0.1], Goal::AnyOf(vec![in_wall.clone(), vec![0.5, 0.9]]));
-    for (name, r) in every_planner(&request, &budget(10), &mut NarrowPassage::default()) {
+    for (name, r) in every_planner(&request, &budget(10), &mut narrow_passage()) {
         let e = r.unwrap_err();
         assert_eq!(
             e,
@@ -617,11 +619,7 @@ fn invalid_start_names_the_contact_with_robot_validity() {
 
 #[test]
 fn timeout_reports_stats() {
-    for (name, r) in every_planner(
-        &passage_request(),
-        &Budget::iterations(3),
-        &mut NarrowPassage::default(),
-    ) {
+    for (name, r) in every_planner(&passage_request(), &Budget::iterations(3), &mut narrow_passage()) {
         match r {
             Err(e @ PlanError::Timeout { .. }) => {
                 let PlanError::Timeout { stats } = &e else {
@@ -640,7 +638,7 @@ fn timeout_reports_stats() {
         }
     }
     // A zero time budget stops at once.
-    for (name, r) in every_planner(&passage_request(), &Budget::time(0.0), &mut NarrowPassage::default()) {
+    for (name, r) in every_planner(&passage_request(), &Budget::time(0.0), &mut narrow_passage()) {
         assert!(matches!(r, Err(PlanError::Timeout { .. })), "{name}: {r:?}");
     }
 }
@@ -704,7 +702,7 @@ fn narrow_passage_is_solved_for_every_seed() {
     let r = passage_request();
     let b = budget(100_000);
     let (space, res) = (square(), PASSAGE_RESOLUTION);
-    let mut v = NarrowPassage::default();
+    let mut v = narrow_passage();
     assert_eq!(
         success_rate("passage/rrt", Rrt::default, &space, res, &mut v, &r, &b, 10),
         1.0
@@ -854,19 +852,13 @@ fn panda_shelf_every_planner() {
 
 /// A slot x ∈ [0.7, 1.0], y ∈ [0.495, 0.505] cut into a block x ∈ [0.7, 1.0], y ∈ [0.3, 0.7],
 /// open on the left.
-#[derive(Default)]
-struct Slot {
-    checks: u64,
-}
-
-impl StateValidator for Slot {
-    fn is_valid(&mut self, q: &[f64]) -> bool {
-        self.checks += 1;
-        let in_block = (0.7..=1.0).contains(&q[0]) && (0.3..=0.7).contains(&q[1]);
-        !in_block || (0.495..=0.505).contains(&q[1])
-    }
-    fn checks(&self) -> u64 {
-        self.checks
+fn slot() -> Region {
+    Region {
+        free: |q| {
+            let in_block = (0.7..=1.0).contains(&q[0]) && (0.3..=0.7).contains(&q[1]);
+            !in_block || (0.495..=0.505).contains(&q[1])
+        },
+        checks: 0,
     }
 }
 
@@ -875,7 +867,7 @@ fn lazy_prm_node_enhancement_reaches_a_goal_in_a_slot() {
     // The goal sits at the bottom of the slot; its roadmap edges to uniform samples all cross
     // the block, so it needs samples near it, which node enhancement puts there.
     let request = PlanRequest::new(vec![0.1, 0.5], Goal::Config(vec![0.97, 0.5]));
-    let mut v = Slot::default();
+    let mut v = slot();
     // Roadmap vertices when solved, median over 21 seeds.
     let mut median_size = |enhance: f64| {
         let mut sizes: Vec<usize> = (0..21)
