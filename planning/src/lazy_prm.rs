@@ -119,6 +119,8 @@ struct Roadmap {
     failures: Vec<f64>,
     /// Next slot of `failures` to overwrite once it is full.
     next_failure: usize,
+    /// The graph search's arrays.
+    scratch: SearchScratch,
 }
 
 /// How many failure points node enhancement remembers.
@@ -162,6 +164,7 @@ impl Roadmap {
             invalid_edges: HashSet::new(),
             failures: Vec::new(),
             next_failure: 0,
+            scratch: SearchScratch::default(),
         }
     }
 
@@ -228,53 +231,106 @@ impl Roadmap {
 
     /// A roadmap path from `start` to any of `goals` at most `weight` times longer than the
     /// shortest (weighted A*, heuristic: distance to the nearest goal), or `None`.
-    fn search<S: Space>(&self, space: &S, start: u32, goals: &[u32], weight: f64) -> Option<Vec<u32>> {
-        let n = self.adjacency.len();
-        let mut is_goal = vec![false; n];
-        for &g in goals {
-            is_goal[g as usize] = true;
-        }
+    fn search<S: Space>(&mut self, space: &S, start: u32, goals: &[u32], weight: f64) -> Option<Vec<u32>> {
+        let Self {
+            nn, adjacency, scratch, ..
+        } = self;
+        scratch.begin(adjacency.len());
         let h = |v: u32| {
             goals
                 .iter()
-                .map(|&g| space.distance(self.nn.state(v as usize), self.nn.state(g as usize)))
+                .map(|&g| space.distance(nn.state(v as usize), nn.state(g as usize)))
                 .fold(f64::INFINITY, f64::min)
         };
-        let mut cost = vec![f64::INFINITY; n];
-        let mut parent = vec![u32::MAX; n];
-        let mut closed = vec![false; n];
-        let mut open = BinaryHeap::new();
-        cost[start as usize] = 0.0;
-        open.push(Reverse((Key(h(start)), start)));
-        while let Some(Reverse((_, v))) = open.pop() {
-            if closed[v as usize] {
+        scratch.improve(start, 0.0, u32::MAX);
+        scratch.open.push(Reverse((Key(h(start)), start)));
+        while let Some(Reverse((_, v))) = scratch.open.pop() {
+            if !scratch.close(v) {
                 continue;
             }
-            closed[v as usize] = true;
-            if is_goal[v as usize] {
+            if goals.contains(&v) {
                 let mut path = vec![v];
                 let mut u = v;
-                while parent[u as usize] != u32::MAX {
-                    u = parent[u as usize];
+                while scratch.parent[u as usize] != u32::MAX {
+                    u = scratch.parent[u as usize];
                     path.push(u);
                 }
                 path.reverse();
                 return Some(path);
             }
-            let qv = self.nn.state(v as usize);
-            for &u in &self.adjacency[v as usize] {
-                if closed[u as usize] {
+            let (qv, cv) = (nn.state(v as usize), scratch.cost(v));
+            for &u in &adjacency[v as usize] {
+                if scratch.is_closed(u) {
                     continue;
                 }
-                let c = cost[v as usize] + space.distance(qv, self.nn.state(u as usize));
-                if c < cost[u as usize] {
-                    cost[u as usize] = c;
-                    parent[u as usize] = v;
-                    open.push(Reverse((Key(c + weight * h(u)), u)));
+                let c = cv + space.distance(qv, nn.state(u as usize));
+                if c < scratch.cost(u) {
+                    scratch.improve(u, c, v);
+                    scratch.open.push(Reverse((Key(c + weight * h(u)), u)));
                 }
             }
         }
         None
+    }
+}
+
+/// The A* search's per-vertex arrays, kept across searches: a vertex's entries count only when
+/// stamped with the current search's number, so a search does not clear (or allocate) arrays
+/// the size of the roadmap, only touches the vertices it reaches.
+#[derive(Clone, Debug, Default)]
+struct SearchScratch {
+    search: u32,
+    /// The search in which the vertex's `cost` and `parent` were set.
+    reached: Vec<u32>,
+    /// The search in which the vertex was closed.
+    closed: Vec<u32>,
+    cost: Vec<f64>,
+    parent: Vec<u32>,
+    open: BinaryHeap<Reverse<(Key, u32)>>,
+}
+
+impl SearchScratch {
+    /// Starts a search over `n` vertices.
+    fn begin(&mut self, n: usize) {
+        self.search = self.search.wrapping_add(1);
+        if self.search == 0 {
+            // Stamps of 2^32 searches ago would read as current: clear them once.
+            self.reached.fill(0);
+            self.closed.fill(0);
+            self.search = 1;
+        }
+        self.reached.resize(n, 0);
+        self.closed.resize(n, 0);
+        self.cost.resize(n, 0.0);
+        self.parent.resize(n, u32::MAX);
+        self.open.clear();
+    }
+
+    fn cost(&self, v: u32) -> f64 {
+        if self.reached[v as usize] == self.search {
+            self.cost[v as usize]
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    fn improve(&mut self, v: u32, cost: f64, parent: u32) {
+        self.reached[v as usize] = self.search;
+        self.cost[v as usize] = cost;
+        self.parent[v as usize] = parent;
+    }
+
+    fn is_closed(&self, v: u32) -> bool {
+        self.closed[v as usize] == self.search
+    }
+
+    /// Closes `v`; false when it already was.
+    fn close(&mut self, v: u32) -> bool {
+        if self.is_closed(v) {
+            return false;
+        }
+        self.closed[v as usize] = self.search;
+        true
     }
 }
 
@@ -344,7 +400,7 @@ impl<S: Space> Planner<S> for LazyPrm {
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
         'search: loop {
-            if let Some(path) = roadmap.search(motion.space(), start, &goal_ids, self.settings.search_weight) {
+            if let Some(path) = roadmap.search(motion.space(), start, &goal_ids, weight) {
                 if !run.next() {
                     break;
                 }
