@@ -165,6 +165,29 @@ impl PairTable {
         Some(Self { a, b, axes, levels })
     }
 
+    /// How many cells, over all levels, hold a certificate computed so far (cells are filled on
+    /// first use, or ahead of time by a warm-up such as the planning crate's
+    /// `RobotValidity::warm_pair_tables`).
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let (a, b) = (panda.link_index("panda_link5").unwrap(), panda.link_index("panda_link7").unwrap());
+    /// let table = panda.pair_table(a, b).unwrap();
+    /// assert_eq!(table.filled_cells(), 0);
+    /// let mut q = panda.neutral_configuration();
+    /// q[5] = 1.8;
+    /// table.certainly_clear(&panda, &q);
+    /// assert!(table.filled_cells() >= 1);
+    /// ```
+    pub fn filled_cells(&self) -> usize {
+        self.levels
+            .iter()
+            .flatten()
+            .filter(|c| c.load(Ordering::Relaxed) != UNKNOWN)
+            .count()
+    }
+
     /// Whether the two links provably do not touch in configuration `q_full` (a full
     /// configuration of `model`, the one this table was built for). `false` means "not
     /// certified", not "touching".

@@ -213,3 +213,38 @@ fn mbm_table_pick_matches_brute_force() {
     }
     assert!(total.0 > 50 && total.1 > 20, "{total:?}");
 }
+
+/// Certified cells of every pair table the model has built.
+fn filled_cells(model: &RobotModel) -> usize {
+    let n = model.links().len();
+    (0..n)
+        .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+        .filter_map(|(a, b)| model.pair_table(a, b))
+        .map(|t| t.filled_cells())
+        .sum()
+}
+
+#[test]
+fn warmed_certificates_change_no_answer() {
+    // Warmed: a model whose pair tables were filled ahead by the warm-up.
+    let (arm, acm) = panda();
+    let scene = ParryScene::new(cluttered(4, 16));
+    let warmed = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+    assert_eq!(filled_cells(arm.model()), 0);
+    warmed.warm_pair_tables(3000, 5);
+    let filled = filled_cells(arm.model());
+    assert!(filled > 50, "warm-up certified only {filled} cells");
+    let mut warmed = warmed;
+    // Cold: a fresh model, its cells filled only as the checks below need them.
+    let (cold_arm, cold_acm) = panda();
+    let mut cold = RobotValidity::new(cold_arm, cold_acm, Arc::new(scene));
+    let qs = random_configurations(&arm, 13, 3000);
+    let answers = |v: &mut RobotValidity| qs.iter().map(|q| v.is_valid(q)).collect::<Vec<_>>();
+    let (w, c) = (answers(&mut warmed), answers(&mut cold));
+    assert_eq!(w, c);
+    let valid = w.iter().filter(|&&ok| ok).count();
+    assert!(valid > 100 && qs.len() - valid > 100, "{valid} valid of {}", qs.len());
+    // The warm-up found cells that these checks need: the cold model filled some of the same.
+    assert!(filled_cells(cold.chain().model()) > 0);
+}
+

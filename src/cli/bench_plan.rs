@@ -15,7 +15,7 @@ use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity,
+    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, ParryScene, RobotValidity,
     Rrt, StateValidator,
 };
 use rand::SeedableRng;
@@ -74,6 +74,12 @@ pub struct BenchPlanArgs {
     /// minimum radius is a quarter of it). Off by default: see `docs/benchmarks.md`.
     #[arg(long)]
     dynamic_domain: Option<f64>,
+    /// Random configurations per robot whose self-collision certificates are computed before
+    /// any plan is timed (`RobotValidity::warm_pair_tables`): plans then run as they do in a
+    /// process that has planned before. 0 times every plan from a cold process, as the first
+    /// plans of a program run. See `docs/benchmarks.md`.
+    #[arg(long, default_value_t = 1_000_000)]
+    warm_up: usize,
     /// Path post-processing.
     #[arg(long, value_enum, default_value_t = ShortcutKind::Parabolic)]
     shortcut: ShortcutKind,
@@ -251,6 +257,17 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 _ => String::new(),
             };
             eprintln!("{}: {}{step}", set.robot, s.note);
+            if a.warm_up > 0 {
+                let mut v = RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
+                v.set_reference(&s.reference)?;
+                let took = v.warm_pair_tables(a.warm_up, a.seed);
+                eprintln!(
+                    "{}: self-collision certificates warmed with {} random configurations in {:.2} s (not timed)",
+                    set.robot,
+                    a.warm_up,
+                    took.as_secs_f64()
+                );
+            }
             setups.insert(set.robot.clone(), s);
         }
         let rs = &setups[&set.robot];
