@@ -460,6 +460,9 @@ enum KdNode {
 #[derive(Clone, Debug)]
 struct KdTree {
     ids: Vec<u32>,
+    /// The states' coordinates in `ids` order, so that a leaf reads contiguous memory.
+    points: Vec<f64>,
+    dim: usize,
     nodes: Vec<KdNode>,
     /// The metric's weight per coordinate.
     weights: Vec<f64>,
@@ -469,10 +472,16 @@ impl KdTree {
     fn build(states: &[f64], dim: usize, weights: &[f64], mut ids: Vec<u32>) -> Self {
         let mut tree = Self {
             ids: Vec::with_capacity(ids.len()),
+            points: Vec::with_capacity(ids.len() * dim),
+            dim,
             nodes: Vec::new(),
             weights: weights.to_vec(),
         };
         tree.build_node(states, dim, &mut ids);
+        for &i in &tree.ids {
+            tree.points
+                .extend_from_slice(&states[i as usize * dim..(i as usize + 1) * dim]);
+        }
         tree
     }
 
@@ -550,8 +559,20 @@ impl<S: Space> KdSearch<'_, S> {
         }
         match self.tree.nodes[n as usize] {
             KdNode::Leaf { start, end } => {
-                for &id in &self.tree.ids[start as usize..end as usize] {
-                    if !self.index.is_removed(id as usize) {
+                let (tree, dim) = (self.tree, self.tree.dim);
+                let (start, end) = (start as usize, end as usize);
+                for (k, &id) in tree.ids[start..end].iter().enumerate() {
+                    // The weighted squared distance from the leaf's own copy of the state
+                    // filters; the space's own distance decides (so answers are the space's
+                    // to the last bit).
+                    let p = &tree.points[(start + k) * dim..(start + k + 1) * dim];
+                    let mut d2 = 0.0;
+                    for ((&x, &y), &w) in self.q.iter().zip(p).zip(&tree.weights) {
+                        let d = w * (x - y);
+                        d2 += d * d;
+                    }
+                    let r = c.radius() + SLACK;
+                    if d2 <= r * r * (1.0 + 1e-9) && !self.index.is_removed(id as usize) {
                         c.offer(self.space.distance(self.q, self.index.state(id as usize)), id);
                     }
                 }
