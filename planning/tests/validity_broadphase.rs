@@ -247,4 +247,3 @@ fn warmed_certificates_change_no_answer() {
     // The warm-up found cells that these checks need: the cold model filled some of the same.
     assert!(filled_cells(cold.chain().model()) > 0);
 }
-

@@ -15,8 +15,8 @@ use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, ParryScene, RobotValidity,
-    Rrt, StateValidator,
+    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene, PlanRequest, Planner,
+    RobotValidity, Rrt, StateValidator,
 };
 use rand::SeedableRng;
 use serde_json::{Value, json};
@@ -258,7 +258,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             };
             eprintln!("{}: {}{step}", set.robot, s.note);
             if a.warm_up > 0 {
-                let mut v = RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
+                let mut v =
+                    RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
                 v.set_reference(&s.reference)?;
                 let took = v.warm_pair_tables(a.warm_up, a.seed);
                 eprintln!(
