@@ -10,8 +10,9 @@ use crate::space::Space;
 use crate::validity::StateValidator;
 
 /// RRT: one tree grown from the start towards random samples (towards a random goal with
-/// probability `goal_bias`), steps of at most `range`. After each new state it tries a
-/// straight motion to the nearest goal when that goal is within `range`.
+/// probability `goal_bias`, towards a point near a random goal with probability `goal_zone`),
+/// steps of at most `range`. After each new state it tries a straight motion to the nearest
+/// goal when that goal is within `range`. [`Rrt::ompl`] is OMPL's `RRT` (no goal zone).
 ///
 /// One iteration is one sample. Settings are serde-derivable, so a TOML file can set them.
 ///
@@ -46,6 +47,16 @@ pub struct Rrt {
     pub range: Option<f64>,
     /// Probability of steering towards a goal instead of a uniform sample (OMPL: 0.05).
     pub goal_bias: f64,
+    /// Probability of steering towards a point near a goal: a uniform sample pulled to within
+    /// `goal_zone_radius` × `range` of a random goal (a uniform fraction of that distance).
+    /// The tree then grows into the goal's neighbourhood, so a goal wedged between obstacles
+    /// (a grasp on a shelf) gets states that can see it from close by. 0 turns it off (OMPL);
+    /// with the default, 0.1, the median planning time on the MotionBenchMaker Panda bookshelf
+    /// problems fell 2.3–2.9× (table_pick 1.9×; box and table_under_pick unchanged), with as
+    /// many successes (`docs/benchmarks.md`). `goal_bias + goal_zone` must not exceed 1.
+    pub goal_zone: f64,
+    /// Radius of the goal zone as a fraction of `range`.
+    pub goal_zone_radius: f64,
 }
 
 impl Default for Rrt {
@@ -53,6 +64,24 @@ impl Default for Rrt {
         Self {
             range: None,
             goal_bias: 0.05,
+            goal_zone: 0.1,
+            goal_zone_radius: 0.3,
+        }
+    }
+}
+
+impl Rrt {
+    /// OMPL's `RRT`: goal bias 0.05, no goal zone, step `range`.
+    ///
+    /// ```
+    /// let rrt = hearth_planning::Rrt::ompl(None);
+    /// assert_eq!((rrt.goal_bias, rrt.goal_zone), (0.05, 0.0));
+    /// ```
+    pub fn ompl(range: Option<f64>) -> Self {
+        Self {
+            range,
+            goal_zone: 0.0,
+            ..Self::default()
         }
     }
 }
@@ -72,6 +101,18 @@ impl<S: Space> Planner<S> for Rrt {
                 self.goal_bias
             )));
         }
+        if !(0.0..=1.0).contains(&self.goal_zone) || self.goal_bias + self.goal_zone > 1.0 {
+            return Err(PlanError::BadInput(format!(
+                "goal_zone is {}; it must be in [0, 1 - goal_bias]",
+                self.goal_zone
+            )));
+        }
+        if !(self.goal_zone_radius.is_finite() && self.goal_zone_radius > 0.0) {
+            return Err(PlanError::BadInput(format!(
+                "goal_zone_radius is {}; it must be positive and finite",
+                self.goal_zone_radius
+            )));
+        }
         let mut run = Run::start(budget, motion, validator);
         let space = motion.space();
         let range = resolve_range(space, self.range, 1.0)?;
@@ -80,6 +121,7 @@ impl<S: Space> Planner<S> for Rrt {
         let mut tree = Tree::new(dim);
         tree.add(&request.start, None);
         let (mut target, mut step) = (vec![0.0; dim], vec![0.0; dim]);
+        let zone_radius = self.goal_zone_radius * range;
         // Direct connection first, when a goal is within range.
         let mut newest = Some(0);
         loop {
@@ -100,8 +142,24 @@ impl<S: Space> Planner<S> for Rrt {
                 break;
             }
             let space = motion.space();
-            if self.goal_bias > 0.0 && rng.random_bool(self.goal_bias) {
+            // One draw picks uniform, goal or goal zone (each probability as documented).
+            let pick = if self.goal_bias > 0.0 || self.goal_zone > 0.0 {
+                rng.random::<f64>()
+            } else {
+                1.0
+            };
+            if pick < self.goal_bias {
                 target.copy_from_slice(&goals[rng.random_range(0..goals.len())]);
+            } else if pick < self.goal_bias + self.goal_zone {
+                space.sample(rng, &mut step);
+                let g = &goals[rng.random_range(0..goals.len())];
+                let d = space.distance(g, &step);
+                let t = if d > 0.0 {
+                    (rng.random::<f64>() * zone_radius / d).min(1.0)
+                } else {
+                    0.0
+                };
+                space.interpolate(g, &step, t, &mut target);
             } else {
                 space.sample(rng, &mut target);
             }

@@ -503,6 +503,32 @@ fn bad_input_is_named() {
         ..Default::default()
     };
     assert!(bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
+    for rrt in [
+        Rrt {
+            goal_zone: -0.1,
+            ..Default::default()
+        },
+        Rrt {
+            goal_bias: 0.5,
+            goal_zone: 0.6,
+            ..Default::default()
+        },
+        Rrt {
+            goal_zone_radius: 0.0,
+            ..Default::default()
+        },
+        Rrt {
+            goal_zone_radius: f64::NAN,
+            ..Default::default()
+        },
+    ] {
+        let before = v.checks();
+        assert!(
+            bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)),
+            "{rrt:?}"
+        );
+        assert_eq!(v.checks(), before, "bad settings check nothing: {rrt:?}");
+    }
     let birrt = BiRrt::with_range(Some(f64::NAN));
     assert!(bad(birrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
     for dd in [

@@ -74,6 +74,10 @@ pub struct BenchPlanArgs {
     /// minimum radius is a quarter of it). Off by default: see `docs/benchmarks.md`.
     #[arg(long)]
     dynamic_domain: Option<f64>,
+    /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
+    /// OMPL's RRT.
+    #[arg(long, default_value_t = 0.1)]
+    goal_zone: f64,
     /// Random configurations per robot whose self-collision certificates are computed before
     /// any plan is timed (`RobotValidity::warm_pair_tables`): plans then run as they do in a
     /// process that has planned before. 0 times every plan from a cold process, as the first
@@ -209,6 +213,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
         bail!("--range must be positive");
     }
+    if !(0.0..=0.95).contains(&a.goal_zone) {
+        bail!("--goal-zone must be in [0, 0.95] (RRT's goal bias is 0.05)");
+    }
     if a.dynamic_domain.is_some_and(|r| !r.is_finite() || r <= 0.0) {
         bail!("--dynamic-domain must be positive and finite");
     }
@@ -302,6 +309,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let outcome = match a.planner {
                     PlannerKind::Rrt => Rrt {
                         range: a.range,
+                        goal_zone: a.goal_zone,
                         ..Rrt::default()
                     }
                     .plan(&mut motion, &mut v, &request, &budget, &mut rng),
