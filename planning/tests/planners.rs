@@ -503,25 +503,19 @@ fn bad_input_is_named() {
         ..Default::default()
     };
     assert!(bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
-    for rrt in [
-        Rrt {
-            goal_zone: -0.1,
-            ..Default::default()
-        },
-        Rrt {
-            goal_bias: 0.5,
-            goal_zone: 0.6,
-            ..Default::default()
-        },
-        Rrt {
-            goal_zone_radius: 0.0,
-            ..Default::default()
-        },
-        Rrt {
-            goal_zone_radius: f64::NAN,
-            ..Default::default()
-        },
+    // (goal bias, goal zone, zone radius): a negative zone, bias + zone over 1, bad radii.
+    for (goal_bias, goal_zone, goal_zone_radius) in [
+        (0.05, -0.1, 0.3),
+        (0.5, 0.6, 0.3),
+        (0.05, 0.1, 0.0),
+        (0.05, 0.1, f64::NAN),
     ] {
+        let rrt = Rrt {
+            range: None,
+            goal_bias,
+            goal_zone,
+            goal_zone_radius,
+        };
         let before = v.checks();
         assert!(
             bad(rrt.clone().plan(&mut motion, &mut v, &r, &budget(10), &mut rng)),
