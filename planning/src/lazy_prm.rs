@@ -10,7 +10,7 @@ use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::nn::NearestNeighbors;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, resolve_range, valid_goals};
-use crate::space::Space;
+use crate::space::{Space, pull_towards};
 use crate::validity::StateValidator;
 
 /// Settings of [`LazyPrm`], serde-derivable so a TOML file can set them.
@@ -121,6 +121,8 @@ struct Roadmap {
     next_failure: usize,
     /// The graph search's arrays.
     scratch: SearchScratch,
+    /// Neighbour ids of the vertex being added (reused, so adding allocates only its edges).
+    near: Vec<usize>,
 }
 
 /// How many failure points node enhancement remembers.
@@ -165,6 +167,7 @@ impl Roadmap {
             failures: Vec::new(),
             next_failure: 0,
             scratch: SearchScratch::default(),
+            near: Vec::new(),
         }
     }
 
@@ -183,21 +186,24 @@ impl Roadmap {
     /// Adds `q` (or finds an equal vertex) and joins it to its `k` nearest vertices within
     /// `range` (one neighbour query for both).
     fn add<S: Space>(&mut self, space: &S, q: &[f64], k: usize, range: f64) -> u32 {
-        let near = self.nn.k_nearest(space, q, k);
+        let mut near = std::mem::take(&mut self.near);
+        self.nn.k_nearest_into(space, q, k, &mut near);
         if let Some(&i) = near.first()
             && space.distance(self.nn.state(i), q) == 0.0
         {
+            self.near = near;
             return i as u32;
         }
         let v = self.nn.insert(q) as u32;
         let mut adjacent = Vec::with_capacity(k);
-        for u in near {
+        for &u in &near {
             if space.distance(self.nn.state(u), q) <= range {
                 adjacent.push(u as u32);
                 self.adjacency[u].push(v);
             }
         }
         self.adjacency.push(adjacent);
+        self.near = near;
         v
     }
 
@@ -441,13 +447,9 @@ impl<S: Space> Planner<S> for LazyPrm {
                 if failures > 0 && rng.random_bool(enhance) {
                     // A point within `enhance_radius` of a random failure, towards the sample.
                     let at = rng.random_range(0..failures) * dim;
+                    near.copy_from_slice(&sample);
                     let centre = &roadmap.failures[at..at + dim];
-                    let d = space.distance(centre, &sample);
-                    if d > 0.0 {
-                        let t = (rng.random::<f64>() * enhance_radius / d).min(1.0);
-                        near.copy_from_slice(&sample);
-                        space.interpolate(centre, &near, t, &mut sample);
-                    }
+                    pull_towards(space, centre, &near, enhance_radius, rng, &mut sample);
                 }
                 if validator.is_valid(&sample) {
                     roadmap.add(motion.space(), &sample, k, range);

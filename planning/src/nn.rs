@@ -57,6 +57,8 @@ pub struct NearestNeighbors {
     live: usize,
     buffer: Vec<u32>,
     trees: Vec<Tree>,
+    /// The k-nearest query's heap, kept between queries so that a query does not allocate.
+    heap: BinaryHeap<Entry>,
 }
 
 impl NearestNeighbors {
@@ -69,6 +71,7 @@ impl NearestNeighbors {
             live: 0,
             buffer: Vec::with_capacity(BUFFER),
             trees: Vec::new(),
+            heap: BinaryHeap::new(),
         }
     }
 
@@ -185,18 +188,43 @@ impl NearestNeighbors {
 
     /// Ids of the `k` nearest states to `q`, nearest first (ties by id).
     pub fn k_nearest<S: Space>(&mut self, space: &S, q: &[f64], k: usize) -> Vec<usize> {
+        let mut out = Vec::with_capacity(k);
+        self.k_nearest_into(space, q, k, &mut out);
+        out
+    }
+
+    /// [`NearestNeighbors::k_nearest`] into `out` (cleared first): with a reused `out`, a
+    /// query allocates nothing once the index has answered one with this `k`.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[10.0], &[false])?;
+    /// let mut nn = NearestNeighbors::new(1);
+    /// for q in [0.0, 4.0, 5.0, 9.0] {
+    ///     nn.insert(&[q]);
+    /// }
+    /// let mut near = Vec::new();
+    /// nn.k_nearest_into(&space, &[4.6], 2, &mut near);
+    /// assert_eq!(near, [2, 1]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    pub fn k_nearest_into<S: Space>(&mut self, space: &S, q: &[f64], k: usize, out: &mut Vec<usize>) {
+        out.clear();
         if k == 0 {
-            return Vec::new();
+            return;
         }
         self.flush(space);
-        let mut c = KNearest {
-            k,
-            heap: BinaryHeap::with_capacity(k + 1),
-        };
+        let mut heap = std::mem::take(&mut self.heap);
+        heap.reserve(k + 1);
+        let mut c = KNearest { k, heap };
         self.search(space, q, &mut c);
-        let mut out = c.heap.into_vec();
-        out.sort_unstable();
-        out.into_iter().map(|e| e.1 as usize).collect()
+        let mut found = c.heap.into_vec();
+        found.sort_unstable();
+        out.extend(found.iter().map(|e| e.1 as usize));
+        found.clear();
+        self.heap = BinaryHeap::from(found);
     }
 
     /// Ids of every state within `radius` of `q` (inclusive), nearest first (ties by id).
@@ -462,7 +490,6 @@ struct KdTree {
     ids: Vec<u32>,
     /// The states' coordinates in `ids` order, so that a leaf reads contiguous memory.
     points: Vec<f64>,
-    dim: usize,
     nodes: Vec<KdNode>,
     /// The metric's weight per coordinate.
     weights: Vec<f64>,
@@ -473,7 +500,6 @@ impl KdTree {
         let mut tree = Self {
             ids: Vec::with_capacity(ids.len()),
             points: Vec::with_capacity(ids.len() * dim),
-            dim,
             nodes: Vec::new(),
             weights: weights.to_vec(),
         };
@@ -559,7 +585,7 @@ impl<S: Space> KdSearch<'_, S> {
         }
         match self.tree.nodes[n as usize] {
             KdNode::Leaf { start, end } => {
-                let (tree, dim) = (self.tree, self.tree.dim);
+                let (tree, dim) = (self.tree, self.tree.weights.len());
                 let (start, end) = (start as usize, end as usize);
                 for (k, &id) in tree.ids[start..end].iter().enumerate() {
                     // The weighted squared distance from the leaf's own copy of the state

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
-use crate::space::Space;
+use crate::space::{Space, pull_towards};
 use crate::validity::StateValidator;
 
 /// RRT: one tree grown from the start towards random samples (towards a random goal with
@@ -153,13 +153,7 @@ impl<S: Space> Planner<S> for Rrt {
             } else if pick < self.goal_bias + self.goal_zone {
                 space.sample(rng, &mut step);
                 let g = &goals[rng.random_range(0..goals.len())];
-                let d = space.distance(g, &step);
-                let t = if d > 0.0 {
-                    (rng.random::<f64>() * zone_radius / d).min(1.0)
-                } else {
-                    0.0
-                };
-                space.interpolate(g, &step, t, &mut target);
+                pull_towards(space, g, &step, zone_radius, rng, &mut target);
             } else {
                 space.sample(rng, &mut target);
             }

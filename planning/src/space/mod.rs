@@ -127,6 +127,28 @@ pub trait Space: Send + Sync {
     }
 }
 
+/// Writes into `out` the point at a uniform random distance of at most `radius` from `centre`
+/// on the way to `towards` (all of `towards` when it is nearer): a uniform sample `towards`
+/// pulled into the neighbourhood of `centre`. Used to sample near goals (RRT's goal zone) and
+/// near failed edges (LazyPRM's node enhancement). Draws one random number when `towards` is
+/// not `centre`, none otherwise.
+pub(crate) fn pull_towards<S: Space + ?Sized, R: Rng + ?Sized>(
+    space: &S,
+    centre: &[f64],
+    towards: &[f64],
+    radius: f64,
+    rng: &mut R,
+    out: &mut [f64],
+) {
+    let d = space.distance(centre, towards);
+    if d > 0.0 {
+        let t = (rng.random::<f64>() * radius / d).min(1.0);
+        space.interpolate(centre, towards, t, out);
+    } else {
+        out.copy_from_slice(towards);
+    }
+}
+
 /// What is wrong with a state, or with the description of a space.
 ///
 /// ```
