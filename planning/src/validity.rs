@@ -149,6 +149,10 @@ pub struct RobotValidity {
     moving_fk: FkSubset,
     /// Whether `poses` of the links that do not move are current.
     fixed_poses_current: bool,
+    /// Per geometric link that moves with the chain: the moving links from the root down to
+    /// it (itself included), so that a state can be tested against the part that hit last
+    /// before the whole robot's forward kinematics is computed.
+    ancestry_fk: Vec<FkSubset>,
     /// Four configurations checked together ([`StateValidator::first_invalid`]): full
     /// configurations and pose buffers, one per lane.
     lane_q: [Vec<f64>; 4],
@@ -156,6 +160,10 @@ pub struct RobotValidity {
     /// Whether the lane buffers hold the current poses of the links that do not move.
     lanes_current: bool,
 }
+
+/// Checks in a row settled by the same part of a link after which the next check first
+/// tests that part alone, on the poses of its link's ancestors only.
+const PARTIAL_FK_STREAK: u32 = 2;
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
 /// tolerances can never make the broad phase prune a pair that the exact test reports.
@@ -220,6 +228,12 @@ struct BroadPhase {
     world_center: Vec<Point3<f64>>,
     /// The check that failed last, tried first.
     hint: Hint,
+    /// With `Hint::Link`: the part of that link (index into `parts`) that touched an obstacle
+    /// (tried before the rest of the link).
+    hint_part: usize,
+    /// How many checks in a row that part settled (a tree wedged in a pocket fails the same
+    /// way again and again).
+    hint_streak: u32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -315,6 +329,8 @@ impl BroadPhase {
             near_soa: std::array::from_fn(|_| Vec::with_capacity(n_parts)),
             world_center: vec![Point3::origin(); n],
             hint: Hint::None,
+            hint_part: usize::MAX,
+            hint_streak: 0,
         }
     }
 }
@@ -350,6 +366,10 @@ impl RobotValidity {
         let pairs = matrix.checked_geometric_pairs(&model);
         let moves = moving_links(&model, &chain);
         let moving_fk = model.fk_subset(|l| moves[l]);
+        let ancestry_fk = geometric
+            .iter()
+            .map(|&g| model.fk_subset(|l| moves[l] && (l == g || model.is_ancestor(l, g))))
+            .collect();
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
         let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves);
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
@@ -365,6 +385,7 @@ impl RobotValidity {
             pair_tables,
             fixed_clear: None,
             moving_fk,
+            ancestry_fk,
             fixed_poses_current: false,
             lane_q: std::array::from_fn(|_| model.neutral_configuration()),
             lane_poses: std::array::from_fn(|_| model.pose_buffer()),
@@ -441,6 +462,37 @@ impl RobotValidity {
         self.fixed_poses_current
     }
 
+    /// Whether the part that settled the last few checks touches an obstacle at `q`,
+    /// computing the poses of only that link and its moving ancestors. Only tried after a
+    /// streak of [`PARTIAL_FK_STREAK`] such checks, so that states that pass do not pay for
+    /// it. On a hit the other moving links' poses are stale; the next check recomputes them.
+    fn hinted_part_hits(&mut self, q: &[f64]) -> bool {
+        let Hint::Link(i) = self.broad.hint else {
+            return false;
+        };
+        let l = self.geometric[i];
+        let k = self.broad.hint_part;
+        if self.broad.hint_streak < PARTIAL_FK_STREAK
+            || !self.fixed_poses_current
+            || q.len() != self.chain.dof()
+            || !self.broad.part_range[l].contains(&k)
+        {
+            return false;
+        }
+        self.chain.scatter(q, &mut self.q_full);
+        let hit = self
+            .model
+            .fk_update(&self.ancestry_fk[i], &self.q_full, &mut self.poses)
+            .is_ok()
+            && self.part_hits(l, k).is_some();
+        if hit {
+            self.broad.hint_streak += 1;
+        } else {
+            self.broad.hint_streak = 0;
+        }
+        hit
+    }
+
     /// Checks up to four states (`dim` values each) with one four-lane forward kinematics
     /// pass, then each state's obstacles and self-collision in order. `None` when the lanes
     /// cannot be used for them (the caller checks them one by one).
@@ -485,22 +537,28 @@ impl RobotValidity {
 
     /// The first obstacle that link `l` touches (exact, part by part).
     fn link_hits(&self, l: usize) -> Option<ObstacleId> {
-        self.parts_hit(l, u64::MAX)
+        self.parts_hit(l, u64::MAX).map(|(_, id)| id)
     }
 
     /// The first obstacle that a part of link `l` meeting one of the cover balls in `balls`
-    /// (bits as in `BroadPhase::part_cover`) touches. Every exact link test goes through here,
-    /// so all of them compose part poses the same way and agree to the last bit.
-    fn parts_hit(&self, l: usize, balls: u64) -> Option<ObstacleId> {
-        let b = &self.broad;
-        let pose = &self.poses[l];
-        b.part_range[l].clone().find_map(|k| {
-            if b.part_cover[k] & balls == 0 {
+    /// (bits as in `BroadPhase::part_cover`) touches, and which part (index into
+    /// `BroadPhase::parts`) touches it.
+    fn parts_hit(&self, l: usize, balls: u64) -> Option<(usize, ObstacleId)> {
+        self.broad.part_range[l].clone().find_map(|k| {
+            if self.broad.part_cover[k] & balls == 0 {
                 return None;
             }
-            let (shape, at) = &b.part_shape[k];
-            self.obstacles.first_hit(shape.as_ref(), &to_pose(&(pose * at)))
+            self.part_hits(l, k).map(|id| (k, id))
         })
+    }
+
+    /// The first obstacle that part `k` of link `l` touches. Every exact link test goes
+    /// through here, so all of them compose part poses the same way and agree to the last bit.
+    #[inline]
+    fn part_hits(&self, l: usize, k: usize) -> Option<ObstacleId> {
+        let (shape, at) = &self.broad.part_shape[k];
+        self.obstacles
+            .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))
     }
 
     /// World centres of the links' bounding spheres for the current poses.
@@ -534,7 +592,13 @@ impl RobotValidity {
         let b = &mut self.broad;
         let range = b.cover_range[l].clone();
         if range.is_empty() || range.len() > BallBatch::CAPACITY || !b.radius[l].is_finite() {
-            return self.link_hits(l).is_some();
+            return match self.parts_hit(l, u64::MAX) {
+                Some((k, _)) => {
+                    self.broad.hint_part = k;
+                    true
+                }
+                None => false,
+            };
         }
         let pose = &self.poses[l];
         b.batch.clear();
@@ -544,7 +608,16 @@ impl RobotValidity {
                 .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
         }
         let touched = self.obstacles.balls_touching(&b.batch);
-        touched != 0 && self.parts_hit(l, touched).is_some()
+        if touched == 0 {
+            return false;
+        }
+        match self.parts_hit(l, touched) {
+            Some((k, _)) => {
+                self.broad.hint_part = k;
+                true
+            }
+            None => false,
+        }
     }
 
     /// World centres of link `l`'s part spheres, computed once per check.
@@ -648,10 +721,20 @@ impl RobotValidity {
             return true;
         }
         let first = match self.broad.hint {
-            Hint::Link(i) => self.link_blocked(i),
+            // The part that hit last, alone, then the whole link.
+            Hint::Link(i) => {
+                let l = self.geometric[i];
+                let k = self.broad.hint_part;
+                if self.broad.part_range[l].contains(&k) && self.part_hits(l, k).is_some() {
+                    self.broad.hint_streak += 1;
+                    return true;
+                }
+                self.link_blocked(i)
+            }
             Hint::Pair(i) => self.pair_blocked(i),
             Hint::None => false,
         };
+        self.broad.hint_streak = 0;
         if first {
             return true;
         }
@@ -826,7 +909,13 @@ impl RobotValidity {
 impl StateValidator for RobotValidity {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
-        if !q.iter().all(|v| v.is_finite()) || !self.update_poses(q) {
+        if !q.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        if self.hinted_part_hits(q) {
+            return false;
+        }
+        if !self.update_poses(q) {
             return false;
         }
         !self.robot_blocked() && !self.attached_blocked()

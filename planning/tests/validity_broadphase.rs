@@ -247,3 +247,77 @@ fn warmed_certificates_change_no_answer() {
     // The warm-up found cells that these checks need: the cold model filled some of the same.
     assert!(filled_cells(cold.chain().model()) > 0);
 }
+
+/// Runs of states close to one colliding state, as a tree wedged in a pocket produces: the
+/// same part settles check after check, so the checker starts testing that part alone on its
+/// ancestors' poses. Runs end with a state that is valid or that another link makes invalid,
+/// so the stale poses left by a short-cut check are caught if anything reads them.
+fn pocket_runs(chain: &Chain, seed: u64, r: &mut Reference, runs: usize) -> Vec<Vec<f64>> {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    let mut qs = Vec::new();
+    let mut q = vec![0.0; chain.dof()];
+    let mut found = 0;
+    while found < runs {
+        chain.random_configuration(&mut rng, &mut q);
+        if r.is_valid(&q) {
+            continue;
+        }
+        found += 1;
+        for _ in 0..12 {
+            qs.push(q.iter().map(|v| v + rng.random_range(-0.01..0.01)).collect());
+        }
+        // Every other run ends with a valid state (when one turns up within 500 draws).
+        let mut other = vec![0.0; chain.dof()];
+        for _ in 0..500 {
+            chain.random_configuration(&mut rng, &mut other);
+            if found % 2 == 1 || r.is_valid(&other) {
+                break;
+            }
+        }
+        qs.push(other);
+    }
+    qs
+}
+
+#[test]
+fn pocket_runs_match_brute_force() {
+    let (arm, acm) = panda();
+    let scene = ParryScene::new(cluttered(5, 24));
+    let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+    let mut r = Reference::new(&arm, &acm, scene);
+    let qs = pocket_runs(&arm, 21, &mut r, 150);
+    let (valid, invalid) = compare(&mut v, &mut r, &qs);
+    assert!(valid > 20 && invalid > 1000, "{valid} valid / {invalid} invalid");
+}
+
+#[test]
+fn fetch_pocket_runs_match_brute_force() {
+    // The Fetch's torso moves links (the head) that are not ancestors of the arm's links: their
+    // poses go stale when a check is settled on the arm's ancestors alone.
+    let m = RobotModel::builtin("fetch").unwrap();
+    let chain = Chain::named(&m, "arm_with_torso").unwrap();
+    let acm = SelfCollisionMatrix::compute(
+        &m,
+        &SelfCollisionSettings {
+            samples: 300,
+            ..Default::default()
+        },
+    );
+    // Clutter in front of the robot, clear of its base and body.
+    let scene = ParryScene::new(
+        cluttered(6, 40)
+            .into_iter()
+            .filter(|o| o.pose.translation.x > 0.0 && o.pose.translation.z > 0.4)
+            .map(|mut o| {
+                o.pose.translation.x += 0.35;
+                o
+            })
+            .collect(),
+    );
+    assert!(scene.len() > 5);
+    let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
+    let mut r = Reference::new(&chain, &acm, scene);
+    let qs = pocket_runs(&chain, 22, &mut r, 100);
+    let (valid, invalid) = compare(&mut v, &mut r, &qs);
+    assert!(valid > 10 && invalid > 800, "{valid} valid / {invalid} invalid");
+}
