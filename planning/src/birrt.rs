@@ -1,6 +1,6 @@
 //! [`BiRrt`]: RRT-Connect (Kuffner & LaValle 2000), OMPL's `RRTConnect`.
 
-use rand::Rng;
+use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
@@ -61,6 +61,9 @@ pub struct BiRrt {
     /// Grow the smaller tree while it has less than half the other's states, instead of
     /// strictly alternating (a tree stuck in a pocket gets the samples it needs to get out).
     pub balance: bool,
+    /// Escape from pockets ([`Escape`]): a tree that almost never grows gets a helper tree of
+    /// short steps from its roots. `None` turns it off.
+    pub escape: Option<Escape>,
 }
 
 impl Default for BiRrt {
@@ -69,22 +72,25 @@ impl Default for BiRrt {
             range: None,
             dynamic_domain: None,
             balance: true,
+            escape: Some(Escape::default()),
         }
     }
 }
 
 impl BiRrt {
-    /// Plain RRT-Connect with step `range`: no dynamic domain, strictly alternating trees.
+    /// Plain RRT-Connect with step `range`: no dynamic domain, strictly alternating trees, no
+    /// pocket escape.
     ///
     /// ```
     /// let plain = hearth_planning::BiRrt::plain(Some(0.3));
-    /// assert!(plain.dynamic_domain.is_none() && !plain.balance);
+    /// assert!(plain.dynamic_domain.is_none() && !plain.balance && plain.escape.is_none());
     /// ```
     pub fn plain(range: Option<f64>) -> Self {
         Self {
             range,
             dynamic_domain: None,
             balance: false,
+            escape: None,
         }
     }
 
@@ -132,6 +138,91 @@ impl Default for DynamicDomain {
     }
 }
 
+/// Settings of the pocket escape of [`BiRrt`].
+///
+/// A goal wedged among obstacles (a gripper between two cans on a shelf) can leave almost no
+/// straight step of the full `range` free: its tree then stays at its roots for hundreds of
+/// thousands of tries, while shorter steps would find the way out. Once a tree has grown by
+/// fewer than one state per `stuck_ratio` extension attempts (after at least `after`
+/// attempts), a share `share` of its turns goes to a helper tree rooted at its roots and
+/// grown with steps of `step × range`. Each helper turn first tries a full step from the
+/// helper state nearest the sample: when that succeeds, the helper's branch and the new
+/// state join the tree, which goes on as before from outside the pocket. The helper's short
+/// steps never become the tree's own states otherwise, so states inside the pocket do not
+/// become the nearest neighbours of later samples.
+///
+/// ```
+/// let e = hearth_planning::birrt::Escape::default();
+/// assert!(e.step < 1.0 && e.share > 0.0 && e.share < 1.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Escape {
+    /// Extension attempts on a tree before it can count as stuck.
+    pub after: u64,
+    /// A tree is stuck while it has grown by fewer than one state per this many attempts.
+    pub stuck_ratio: u64,
+    /// Share of a stuck tree's turns given to its helper tree, in (0, 1).
+    pub share: f64,
+    /// The helper tree's step, as a fraction of the planner's step, in (0, 1].
+    pub step: f64,
+    /// The step that lets a helper state join the tree, as a fraction of the planner's step,
+    /// in [`step`](Escape::step), 1].
+    pub join: f64,
+}
+
+impl Default for Escape {
+    fn default() -> Self {
+        Self {
+            after: 10_000,
+            stuck_ratio: 2_000,
+            share: 0.5,
+            step: 0.25,
+            join: 0.5,
+        }
+    }
+}
+
+/// A stuck tree's helper ([`Escape`]): short steps from the tree's roots, and for each helper
+/// state the tree state it became, once it joined the tree.
+struct Helper {
+    tree: Tree,
+    joined: Vec<Option<usize>>,
+}
+
+impl Helper {
+    /// Rooted at the first `roots` states of `grown` (its roots, added first).
+    fn new(grown: &Grown, roots: usize, dim: usize) -> Self {
+        let mut tree = Tree::new(dim);
+        for r in 0..roots {
+            tree.add(grown.tree.state(r), None);
+        }
+        Self {
+            tree,
+            joined: (0..roots).map(Some).collect(),
+        }
+    }
+
+    /// Adds helper state `h`'s branch to `grown` where it is not there yet; returns the tree
+    /// index of `h`.
+    fn join(&mut self, h: usize, grown: &mut Grown, chain: &mut Vec<usize>) -> usize {
+        chain.clear();
+        let mut at = h;
+        let mut above = loop {
+            if let Some(t) = self.joined[at] {
+                break t;
+            }
+            chain.push(at);
+            at = self.tree.parent(at).expect("helper roots have joined");
+        };
+        for &k in chain.iter().rev() {
+            above = grown.add(self.tree.state(k), Some(above));
+            self.joined[k] = Some(above);
+        }
+        above
+    }
+}
+
 /// [`BiRrt`]'s default step as a fraction of [`default_range`](crate::planner::default_range).
 const BIRRT_RANGE_SCALE: f64 = 0.1;
 
@@ -169,6 +260,61 @@ struct Stepper {
 }
 
 impl Stepper {
+    /// Steps from `from` towards `target` by at most `range` into `self.step`; whether that
+    /// state and the motion to it are valid.
+    fn try_step<S: Space, V: StateValidator + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        from: &[f64],
+        target: &[f64],
+        range: f64,
+    ) -> bool {
+        let d = motion.space().distance(from, target);
+        if d <= range {
+            self.step.copy_from_slice(target);
+        } else {
+            motion.space().interpolate(from, target, range / d, &mut self.step);
+        }
+        validator.is_valid(&self.step) && motion.check_motion(validator, from, &self.step)
+    }
+
+    /// A helper turn of a stuck tree ([`Escape`]): a full step from the helper state nearest
+    /// `target`, which joins the tree with its branch when valid (returns its tree index),
+    /// else a short step that grows the helper.
+    #[allow(clippy::too_many_arguments)]
+    fn escape<S: Space, V: StateValidator + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        grown: &mut Grown,
+        helper: &mut Helper,
+        target: &[f64],
+        short: f64,
+        long: f64,
+        chain: &mut Vec<usize>,
+    ) -> Option<usize> {
+        let near = helper
+            .tree
+            .nn
+            .nearest(motion.space(), target)
+            .expect("helpers are never empty");
+        self.from.copy_from_slice(helper.tree.state(near));
+        let from = std::mem::take(&mut self.from);
+        let out = if self.try_step(motion, validator, &from, target, long) {
+            let at = helper.join(near, grown, chain);
+            Some(grown.add(&self.step, Some(at)))
+        } else {
+            if self.try_step(motion, validator, &from, target, short) {
+                helper.tree.add(&self.step, Some(near));
+                helper.joined.push(None);
+            }
+            None
+        };
+        self.from = from;
+        out
+    }
+
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
     /// `None` when the sample was outside the nearest state's domain or the step was blocked.
     fn extend<S: Space, V: StateValidator + ?Sized>(
@@ -277,6 +423,27 @@ impl<S: Space> Planner<S> for BiRrt {
             step: vec![0.0; dim],
             from: vec![0.0; dim],
         };
+        let escape = match self.escape {
+            None => None,
+            Some(e) => {
+                if !(e.share > 0.0
+                    && e.share < 1.0
+                    && e.step > 0.0
+                    && e.step <= e.join
+                    && e.join <= 1.0
+                    && e.stuck_ratio > 0)
+                {
+                    return Err(PlanError::BadInput(format!(
+                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, stuck_ratio positive"
+                    )));
+                }
+                Some(e)
+            }
+        };
+        let roots = [1, goals.len()];
+        let mut attempts = [0u64; 2];
+        let mut helpers: [Option<Helper>; 2] = [None, None];
+        let mut chain = Vec::new();
         let mut target = request.start.clone();
         // Try connecting the goal tree straight to the start first.
         let mut joined = stepper
@@ -295,9 +462,36 @@ impl<S: Space> Planner<S> for BiRrt {
                 grow = 1 - grow;
             }
             motion.space().sample(rng, &mut target);
+            attempts[grow] += 1;
             let [t0, t1] = &mut trees;
             let (this, other) = if grow == 0 { (t0, t1) } else { (t1, t0) };
-            let Some(i) = stepper.extend(motion, validator, this, &target) else {
+            let helper = match escape {
+                Some(e)
+                    if attempts[grow] >= e.after
+                        && ((this.len() - roots[grow]) as u64).saturating_mul(e.stuck_ratio) < attempts[grow]
+                        && rng.random::<f64>() < e.share =>
+                {
+                    Some((
+                        helpers[grow].get_or_insert_with(|| Helper::new(this, roots[grow], dim)),
+                        e,
+                    ))
+                }
+                _ => None,
+            };
+            let extended = match helper {
+                Some((h, e)) => stepper.escape(
+                    motion,
+                    validator,
+                    this,
+                    h,
+                    &target,
+                    e.step * range,
+                    e.join * range,
+                    &mut chain,
+                ),
+                None => stepper.extend(motion, validator, this, &target),
+            };
+            let Some(i) = extended else {
                 continue;
             };
             target.copy_from_slice(this.tree.state(i));

@@ -343,6 +343,13 @@ impl Tree {
         self.nn.state(i)
     }
 
+    /// The parent of state `i` (`None` for a root).
+    #[inline]
+    pub(crate) fn parent(&self, i: usize) -> Option<usize> {
+        let p = self.parents[i];
+        (p != ROOT).then_some(p as usize)
+    }
+
     /// States from the root to `i`.
     pub(crate) fn branch(&self, mut i: usize) -> Vec<Vec<f64>> {
         let mut out = vec![self.state(i).to_vec()];

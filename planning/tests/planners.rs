@@ -11,8 +11,8 @@ use hearth_planning::problem::ProblemSet;
 use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest, Planner,
-    Rrt, Solution,
+    BiRrt, Budget, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest,
+    Planner, Rrt, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -246,6 +246,68 @@ fn narrow_passage_birrt_dynamic_domain() {
         dynamic_domain: Some(DynamicDomain::default()),
         ..BiRrt::default()
     });
+}
+
+/// A pocket: the goal sits at the closed end of a corridor x ∈ (0.6, 0.9), y ∈ (0.45, 0.55)
+/// inside a block x ∈ [0.55, 0.95], y ∈ [0.4, 0.6], whose only way out is a hole
+/// x ∈ (0.6, 0.63) through the top wall (coordinates relative to (100, 100), the middle of
+/// [`pocket_space`]). No straight line from the goal leaves the corridor
+/// (it would have to pass the hole's bottom with a slope under 0.2 and its top with one over
+/// 0.35), so a goal tree of 0.4-long steps grows only from samples that land within a step
+/// of it inside the corridor: in the 200 × 200 square of [`pocket_space`], about one in 10⁶.
+fn pocket() -> Region {
+    Region {
+        free: |q| {
+            let (x, y) = (q[0] - 100.0, q[1] - 100.0);
+            let block = (0.55..=0.95).contains(&x) && (0.4..=0.6).contains(&y);
+            let corridor = x > 0.6 && x < 0.9 && y > 0.45 && y < 0.55;
+            let hole = x > 0.6 && x < 0.63 && y >= 0.55;
+            !block || corridor || hole
+        },
+        checks: 0,
+    }
+}
+
+/// Edge checks in the pocket world: a tenth of the hole's width.
+const POCKET_RESOLUTION: f64 = 0.003;
+
+fn pocket_space() -> JointSpace {
+    JointSpace::new(&[0., 0.], &[200., 200.], &[false, false]).unwrap()
+}
+
+#[test]
+fn pocketed_goal_birrt_escape() {
+    let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
+    let with = |escape| BiRrt {
+        range: Some(0.4),
+        escape,
+        ..BiRrt::default()
+    };
+    let s = solve(
+        "pocket/birrt",
+        || with(Some(Escape::default())),
+        &pocket_space(),
+        POCKET_RESOLUTION,
+        &mut pocket(),
+        &request,
+        &budget(200_000),
+    );
+    // The path leaves through the hole.
+    assert!(
+        s.path
+            .states
+            .iter()
+            .any(|q| q[0] > 100.6 && q[0] < 100.63 && q[1] > 100.5 && q[1] < 100.6),
+        "{:?}",
+        s.path.states
+    );
+    // Without the escape the goal tree stays at the goal.
+    let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(7);
+    match with(None).plan(&mut motion, &mut pocket(), &request, &budget(200_000), &mut rng) {
+        Err(PlanError::Timeout { stats }) => assert_eq!(stats.tree_sizes[1], 1, "{stats:?}"),
+        other => panic!("expected a timeout, got {other:?}"),
+    }
 }
 
 #[test]
@@ -555,6 +617,26 @@ fn bad_input_is_named() {
         assert!(
             matches!(&e, PlanError::BadInput(m) if m.contains("dynamic domain")),
             "{dd:?}: {e}"
+        );
+    }
+    let e = Escape::default();
+    for (escape, needle) in [
+        (Escape { share: 0.0, ..e }, "share: 0.0"),
+        (Escape { share: 1.0, ..e }, "share: 1.0"),
+        (Escape { share: f64::NAN, ..e }, "share: NaN"),
+        (Escape { step: 0.0, ..e }, "step: 0.0"),
+        (Escape { step: 0.75, ..e }, "step: 0.75"),
+        (Escape { join: 1.5, ..e }, "join: 1.5"),
+        (Escape { stuck_ratio: 0, ..e }, "stuck_ratio: 0"),
+    ] {
+        let mut birrt = BiRrt {
+            escape: Some(escape),
+            ..BiRrt::default()
+        };
+        let e = birrt.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::BadInput(m) if m.contains("escape") && m.contains(needle)),
+            "{needle}: {e}"
         );
     }
     let mut prm = LazyPrm::new(LazyPrmSettings {

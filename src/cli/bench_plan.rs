@@ -15,8 +15,8 @@ use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene, PlanRequest, Planner,
-    RobotValidity, Rrt, StateValidator,
+    BiRrt, Budget, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene, PlanRequest,
+    Planner, RobotValidity, Rrt, StateValidator,
 };
 use rand::SeedableRng;
 use serde_json::{Value, json};
@@ -74,6 +74,10 @@ pub struct BenchPlanArgs {
     /// minimum radius is a quarter of it). Off by default: see `docs/benchmarks.md`.
     #[arg(long)]
     dynamic_domain: Option<f64>,
+    /// BiRRT only: turn off the pocket escape (`Escape`: a tree that almost never grows gets a
+    /// helper tree of short steps), for comparisons with plain balanced RRT-Connect.
+    #[arg(long)]
+    no_escape: bool,
     /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
     /// OMPL's RRT.
     #[arg(long, default_value_t = 0.1)]
@@ -222,6 +226,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.dynamic_domain.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--dynamic-domain applies to --planner birrt only");
     }
+    if a.no_escape && a.planner != PlannerKind::Birrt {
+        bail!("--no-escape applies to --planner birrt only");
+    }
     let mut sets: Vec<(ProblemSet, Option<PathBuf>)> = Vec::new();
     for p in &a.problems {
         if p.is_dir() {
@@ -322,6 +329,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         BiRrt {
                             range: a.range.or(birrt_step(&set.robot)),
                             dynamic_domain,
+                            escape: (!a.no_escape).then(Escape::default),
                             ..BiRrt::default()
                         }
                         .plan(&mut motion, &mut v, &request, &budget, &mut rng)
