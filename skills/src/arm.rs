@@ -587,7 +587,7 @@ impl Arm {
         let mut under: Vec<BodyId> = world
             .contacts(self.robot)?
             .into_iter()
-            .filter(|c| self.settings.support_links.iter().any(|l| *l == c.link))
+            .filter(|c| self.settings.support_links.contains(&c.link))
             .map(|c| c.other)
             .collect();
         under.extend(world.ground());

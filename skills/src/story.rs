@@ -573,7 +573,7 @@ fn story_stages(
     dish: ModelHandle,
 ) -> Result<(), ()> {
     let exec = options.execution;
-    let mut rng = Pcg64Mcg::seed_from_u64(options.seed ^ 0x5707_1e5);
+    let mut rng = Pcg64Mcg::seed_from_u64(options.seed ^ 0x0570_71e5);
     let nav = Navigator::new(NavigateSettings {
         execution: exec,
         plan_iterations: 60_000,

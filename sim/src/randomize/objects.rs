@@ -18,6 +18,7 @@
 //! always validates.
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rand::RngExt;
@@ -75,11 +76,12 @@ struct Cache(HashMap<AssetKey, Asset>);
 impl Cache {
     fn get(&mut self, spec: &AssetSpec) -> Option<&Asset> {
         let key = (spec.category, spec.variant, spec.scale.to_bits(), spec.material);
-        if !self.0.contains_key(&key) {
-            let asset = Asset::build_spec(spec).ok()?;
-            self.0.insert(key, asset);
-        }
-        self.0.get(&key)
+        let asset: &Asset = match self.0.entry(key) {
+            Entry::Occupied(e) => e.into_mut(),
+            // A failed build returns before anything is inserted.
+            Entry::Vacant(e) => e.insert(Asset::build_spec(spec).ok()?),
+        };
+        Some(asset)
     }
 }
 
@@ -292,6 +294,7 @@ fn lay_out(located: &[Located], s_old: &Asset, s_new: &Asset, layout: Layout) ->
         Layout::Relative | Layout::Offset => {
             for (l, t) in located.iter().zip(&mut targets) {
                 let (old, new) = (&s_old.surfaces[l.old_surface], &s_new.surfaces[l.surface]);
+                #[allow(clippy::needless_range_loop, reason = "`a` indexes six per-axis arrays")]
                 for a in 0..2 {
                     let x = match layout {
                         Layout::Offset => new.min[a] + (l.c_old[a] - old.min[a]),
@@ -357,9 +360,13 @@ fn put(
     ([t.x, t.y, t.z], l.bl_n + delta, l.bh_n + delta)
 }
 
+/// A moved dependent: its index, then what [`put`] gives (its position, and its box `lo`, `hi`
+/// in the new support frame).
+type Move = (usize, ([f64; 3], Vector3<f64>, Vector3<f64>));
+
 /// Whether two of the moved objects' boxes (support frame) interpenetrate by more than the
 /// scene format's tolerance.
-fn crowded(moves: &[(usize, ([f64; 3], Vector3<f64>, Vector3<f64>))]) -> bool {
+fn crowded(moves: &[Move]) -> bool {
     for (i, (_, (_, lo_a, hi_a))) in moves.iter().enumerate() {
         for (_, (_, lo_b, hi_b)) in &moves[i + 1..] {
             let depth = (0..3)

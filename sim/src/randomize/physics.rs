@@ -147,10 +147,9 @@ pub fn randomize_physics(
         let mut r = stream(base, 0, Stream::Physics, name);
         let mut draws: BTreeMap<Material, Draw> = BTreeMap::new();
         for b in &bodies {
-            if !draws.contains_key(&b.material) {
-                let d = draw(b.material, cfg.spread, &mut r);
-                draws.insert(b.material, d);
-            }
+            draws
+                .entry(b.material)
+                .or_insert_with(|| draw(b.material, cfg.spread, &mut r));
         }
         for b in &bodies {
             let d = draws[&b.material];

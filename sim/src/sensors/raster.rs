@@ -112,7 +112,7 @@ impl Setup {
     fn new(k: &Projection, s: [[f32; 2]; 3], plane: [f32; 3], tri: u32) -> Option<Self> {
         let [p0, p1, p2] = s;
         let area = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
-        if !(area.abs() > 1e-12) {
+        if area.is_nan() || area.abs() <= 1e-12 {
             return None;
         }
         // Counter-clockwise in pixel coordinates from here on.
@@ -177,7 +177,8 @@ impl Setup {
             }
             let a = ceil_i(lo - 0.5).max(self.u0);
             let b = floor_i(hi - 0.5).min(self.u1);
-            if empty || !(lo <= hi) || a > b {
+            // `lo` and `hi` are never NaN (`f32::max`/`min` drop a NaN operand).
+            if empty || lo > hi || a > b {
                 continue;
             }
             let (a, b) = (a as usize, b as usize);

@@ -892,7 +892,7 @@ impl World {
                 continue;
             };
             let stiffness = entry.gains[v].stiffness;
-            if !(stiffness > 0.0) {
+            if stiffness.is_nan() || stiffness <= 0.0 {
                 continue;
             }
             let axis = *child.rotation() * slot.local_axis;
