@@ -13,7 +13,8 @@ use crate::validity::StateValidator;
 /// grown in turns. Each iteration extends one tree a step of at most `range` towards a random
 /// sample, then greedily connects the other tree to the new state (equal steps of at most
 /// `range` until it reaches it or is blocked). Tree balancing ([`BiRrt::balance`], as in
-/// VAMP's RRT-Connect) is on by default; dynamic-domain sampling ([`DynamicDomain`]) is
+/// VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper tree of short steps for a
+/// tree that barely grows) are on by default; dynamic-domain sampling ([`DynamicDomain`]) is
 /// available but off, because it lowered success on the MotionBenchMaker problems
 /// (`docs/benchmarks.md`). [`BiRrt::plain`] is the textbook algorithm.
 ///

@@ -162,8 +162,9 @@ pub struct RobotValidity {
 }
 
 /// Checks in a row settled by the same part of a link after which the next check first
-/// tests that part alone, on the poses of its link's ancestors only.
-const PARTIAL_FK_STREAK: u32 = 2;
+/// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
+/// first on the whole robot's poses).
+const PARTIAL_FK_STREAK: u32 = 3;
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
 /// tolerances can never make the broad phase prune a pair that the exact test reports.
@@ -231,8 +232,9 @@ struct BroadPhase {
     /// With `Hint::Link`: the part of that link (index into `parts`) that touched an obstacle
     /// (tried before the rest of the link).
     hint_part: usize,
-    /// How many checks in a row that part settled (a tree wedged in a pocket fails the same
-    /// way again and again).
+    /// How many checks in a row that part settled, 0 after a check it did not settle (a tree
+    /// wedged in a pocket fails the same way again and again; a state that passes should not
+    /// pay for testing it).
     hint_streak: u32,
 }
 
@@ -595,6 +597,7 @@ impl RobotValidity {
             return match self.parts_hit(l, u64::MAX) {
                 Some((k, _)) => {
                     self.broad.hint_part = k;
+                    self.broad.hint_streak = 1;
                     true
                 }
                 None => false,
@@ -614,6 +617,7 @@ impl RobotValidity {
         match self.parts_hit(l, touched) {
             Some((k, _)) => {
                 self.broad.hint_part = k;
+                self.broad.hint_streak = 1;
                 true
             }
             None => false,
@@ -721,11 +725,12 @@ impl RobotValidity {
             return true;
         }
         let first = match self.broad.hint {
-            // The part that hit last, alone, then the whole link.
+            // After a check that this link's part settled: that part alone first.
             Hint::Link(i) => {
                 let l = self.geometric[i];
                 let k = self.broad.hint_part;
-                if self.broad.part_range[l].contains(&k) && self.part_hits(l, k).is_some() {
+                if self.broad.hint_streak > 0 && self.broad.part_range[l].contains(&k) && self.part_hits(l, k).is_some()
+                {
                     self.broad.hint_streak += 1;
                     return true;
                 }
@@ -734,8 +739,10 @@ impl RobotValidity {
             Hint::Pair(i) => self.pair_blocked(i),
             Hint::None => false,
         };
-        self.broad.hint_streak = 0;
         if first {
+            if matches!(self.broad.hint, Hint::Pair(_)) {
+                self.broad.hint_streak = 0;
+            }
             return true;
         }
         let skip = self.broad.hint;
@@ -767,9 +774,11 @@ impl RobotValidity {
         for i in 0..self.pairs.len() {
             if self.pair_moves[i] && skip != Hint::Pair(i) && self.pair_blocked(i) {
                 self.broad.hint = Hint::Pair(i);
+                self.broad.hint_streak = 0;
                 return true;
             }
         }
+        self.broad.hint_streak = 0;
         false
     }
 
