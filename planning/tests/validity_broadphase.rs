@@ -64,17 +64,19 @@ impl Reference {
     }
 }
 
+/// A built-in robot's chain and a self-collision matrix from `samples` random configurations.
+fn robot(name: &str, chain: &str, samples: usize) -> (Chain, SelfCollisionMatrix) {
+    let m = RobotModel::builtin(name).unwrap();
+    let chain = Chain::named(&m, chain).unwrap();
+    let settings = SelfCollisionSettings {
+        samples,
+        ..Default::default()
+    };
+    (chain, SelfCollisionMatrix::compute(&m, &settings))
+}
+
 fn panda() -> (Chain, SelfCollisionMatrix) {
-    let m = RobotModel::builtin("panda").unwrap();
-    let arm = Chain::named(&m, "arm").unwrap();
-    let acm = SelfCollisionMatrix::compute(
-        &m,
-        &SelfCollisionSettings {
-            samples: 1000,
-            ..Default::default()
-        },
-    );
-    (arm, acm)
+    robot("panda", "arm", 1000)
 }
 
 fn cluttered(seed: u64, n: usize) -> Vec<Obstacle> {
@@ -294,15 +296,7 @@ fn pocket_runs_match_brute_force() {
 fn fetch_pocket_runs_match_brute_force() {
     // The Fetch's torso moves links (the head) that are not ancestors of the arm's links: their
     // poses go stale when a check is settled on the arm's ancestors alone.
-    let m = RobotModel::builtin("fetch").unwrap();
-    let chain = Chain::named(&m, "arm_with_torso").unwrap();
-    let acm = SelfCollisionMatrix::compute(
-        &m,
-        &SelfCollisionSettings {
-            samples: 300,
-            ..Default::default()
-        },
-    );
+    let (chain, acm) = robot("fetch", "arm_with_torso", 300);
     // Clutter in front of the robot, clear of its base and body.
     let scene = ParryScene::new(
         cluttered(6, 40)
