@@ -450,6 +450,10 @@ fn bench_plan_writes_results_json() {
         (&["--only", "table_pick:x"][..], "not a problem id"),
         (&["--dynamic-domain", "0"][..], "--dynamic-domain must be positive"),
         (&["--dynamic-domain", "2", "--planner", "rrt"][..], "birrt only"),
+        (
+            &["--no-escape", "--planner", "lazyprm"][..],
+            "--no-escape applies to --planner birrt only",
+        ),
     ] {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
             .args(["bench", "plan", "--problems", data])
