@@ -146,8 +146,8 @@ impl Default for DynamicDomain {
 /// thousands of tries, while shorter steps would find the way out. Once a tree has grown by
 /// fewer than one state per `stuck_ratio` extension attempts (after at least `after`
 /// attempts), a share `share` of its turns goes to a helper tree rooted at its roots and
-/// grown with steps of `step × range`. Each helper turn first tries a full step from the
-/// helper state nearest the sample: when that succeeds, the helper's branch and the new
+/// grown with steps of `step × range`. Each helper turn first tries a step of `join × range`
+/// from the helper state nearest the sample: when that succeeds, the helper's branch and the new
 /// state join the tree, which goes on as before from outside the pocket. The helper's short
 /// steps never become the tree's own states otherwise, so states inside the pocket do not
 /// become the nearest neighbours of later samples.
@@ -280,9 +280,9 @@ impl Stepper {
         validator.is_valid(&self.step) && motion.check_motion(validator, from, &self.step)
     }
 
-    /// A helper turn of a stuck tree ([`Escape`]): a full step from the helper state nearest
+    /// A helper turn of a stuck tree ([`Escape`]): a `long` step from the helper state nearest
     /// `target`, which joins the tree with its branch when valid (returns its tree index),
-    /// else a short step that grows the helper.
+    /// else a `short` step that grows the helper.
     #[allow(clippy::too_many_arguments)]
     fn escape<S: Space, V: StateValidator + ?Sized>(
         &mut self,
@@ -300,20 +300,15 @@ impl Stepper {
             .nn
             .nearest(motion.space(), target)
             .expect("helpers are never empty");
-        self.from.copy_from_slice(helper.tree.state(near));
-        let from = std::mem::take(&mut self.from);
-        let out = if self.try_step(motion, validator, &from, target, long) {
+        if self.try_step(motion, validator, helper.tree.state(near), target, long) {
             let at = helper.join(near, grown, chain);
-            Some(grown.add(&self.step, Some(at)))
-        } else {
-            if self.try_step(motion, validator, &from, target, short) {
-                helper.tree.add(&self.step, Some(near));
-                helper.joined.push(None);
-            }
-            None
-        };
-        self.from = from;
-        out
+            return Some(grown.add(&self.step, Some(at)));
+        }
+        if self.try_step(motion, validator, helper.tree.state(near), target, short) {
+            helper.tree.add(&self.step, Some(near));
+            helper.joined.push(None);
+        }
+        None
     }
 
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
@@ -327,16 +322,10 @@ impl Stepper {
     ) -> Option<usize> {
         let space = motion.space();
         let near = grown.tree.nn.nearest(space, target).expect("trees are never empty");
-        let d = space.distance(grown.tree.state(near), target);
-        if self.domain.is_some() && d > grown.radius[near] {
+        if self.domain.is_some() && space.distance(grown.tree.state(near), target) > grown.radius[near] {
             return None;
         }
-        if d <= self.range {
-            self.step.copy_from_slice(target);
-        } else {
-            space.interpolate(grown.tree.state(near), target, self.range / d, &mut self.step);
-        }
-        let ok = validator.is_valid(&self.step) && motion.check_motion(validator, grown.tree.state(near), &self.step);
+        let ok = self.try_step(motion, validator, grown.tree.state(near), target, self.range);
         if let Some((radius, min_radius, alpha)) = self.domain {
             let r = &mut grown.radius[near];
             if ok {
@@ -410,20 +399,6 @@ impl<S: Space> Planner<S> for BiRrt {
                 Some((dd.radius * range, dd.min_radius.min(dd.radius) * range, dd.alpha))
             }
         };
-        let goals = valid_goals(space, validator, request, budget)?;
-        let dim = space.dim();
-        // trees[0] grows from the start, trees[1] from the goals.
-        let mut trees = [Grown::new(dim), Grown::new(dim)];
-        trees[0].add(&request.start, None);
-        for g in &goals {
-            trees[1].add(g, None);
-        }
-        let mut stepper = Stepper {
-            range,
-            domain,
-            step: vec![0.0; dim],
-            from: vec![0.0; dim],
-        };
         let escape = match self.escape {
             None => None,
             Some(e) => {
@@ -440,6 +415,20 @@ impl<S: Space> Planner<S> for BiRrt {
                 }
                 Some(e)
             }
+        };
+        let goals = valid_goals(space, validator, request, budget)?;
+        let dim = space.dim();
+        // trees[0] grows from the start, trees[1] from the goals.
+        let mut trees = [Grown::new(dim), Grown::new(dim)];
+        trees[0].add(&request.start, None);
+        for g in &goals {
+            trees[1].add(g, None);
+        }
+        let mut stepper = Stepper {
+            range,
+            domain,
+            step: vec![0.0; dim],
+            from: vec![0.0; dim],
         };
         let roots = [1, goals.len()];
         let mut attempts = [0u64; 2];

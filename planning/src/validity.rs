@@ -232,9 +232,9 @@ struct BroadPhase {
     /// With `Hint::Link`: the part of that link (index into `parts`) that touched an obstacle
     /// (tried before the rest of the link).
     hint_part: usize,
-    /// How many checks in a row that part settled, 0 after a check it did not settle (a tree
-    /// wedged in a pocket fails the same way again and again; a state that passes should not
-    /// pay for testing it).
+    /// How many checks in a row that part settled (a tree wedged in a pocket fails the same way
+    /// again and again), 0 after a check that passed (which should not pay for testing it). It
+    /// is read only with a link hint, and every link hint is set where a part is recorded.
     hint_streak: u32,
 }
 
@@ -469,16 +469,10 @@ impl RobotValidity {
     /// streak of [`PARTIAL_FK_STREAK`] such checks, so that states that pass do not pay for
     /// it. On a hit the other moving links' poses are stale; the next check recomputes them.
     fn hinted_part_hits(&mut self, q: &[f64]) -> bool {
-        let Hint::Link(i) = self.broad.hint else {
+        let Some((i, l, k)) = self.hinted_part() else {
             return false;
         };
-        let l = self.geometric[i];
-        let k = self.broad.hint_part;
-        if self.broad.hint_streak < PARTIAL_FK_STREAK
-            || !self.fixed_poses_current
-            || q.len() != self.chain.dof()
-            || !self.broad.part_range[l].contains(&k)
-        {
+        if self.broad.hint_streak < PARTIAL_FK_STREAK || !self.fixed_poses_current || q.len() != self.chain.dof() {
             return false;
         }
         self.chain.scatter(q, &mut self.q_full);
@@ -493,6 +487,16 @@ impl RobotValidity {
             self.broad.hint_streak = 0;
         }
         hit
+    }
+
+    /// With a link hint and right after a check that one of its parts settled: (geometric
+    /// link number, link, part).
+    fn hinted_part(&self) -> Option<(usize, usize, usize)> {
+        let Hint::Link(i) = self.broad.hint else {
+            return None;
+        };
+        let (l, k) = (self.geometric[i], self.broad.hint_part);
+        (self.broad.hint_streak > 0 && self.broad.part_range[l].contains(&k)).then_some((i, l, k))
     }
 
     /// Checks up to four states (`dim` values each) with one four-lane forward kinematics
@@ -593,35 +597,28 @@ impl RobotValidity {
         let l = self.geometric[i];
         let b = &mut self.broad;
         let range = b.cover_range[l].clone();
-        if range.is_empty() || range.len() > BallBatch::CAPACITY || !b.radius[l].is_finite() {
-            return match self.parts_hit(l, u64::MAX) {
-                Some((k, _)) => {
-                    self.broad.hint_part = k;
-                    self.broad.hint_streak = 1;
-                    true
-                }
-                None => false,
-            };
-        }
-        let pose = &self.poses[l];
-        b.batch.clear();
-        for k in range {
-            let c = pose * b.cover[k].0;
-            b.batch
-                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
-        }
-        let touched = self.obstacles.balls_touching(&b.batch);
-        if touched == 0 {
-            return false;
-        }
-        match self.parts_hit(l, touched) {
-            Some((k, _)) => {
-                self.broad.hint_part = k;
-                self.broad.hint_streak = 1;
-                true
+        let balls = if range.is_empty() || range.len() > BallBatch::CAPACITY || !b.radius[l].is_finite() {
+            u64::MAX
+        } else {
+            let pose = &self.poses[l];
+            b.batch.clear();
+            for k in range {
+                let c = pose * b.cover[k].0;
+                b.batch
+                    .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
             }
-            None => false,
-        }
+            let touched = self.obstacles.balls_touching(&b.batch);
+            if touched == 0 {
+                return false;
+            }
+            touched
+        };
+        let Some((k, _)) = self.parts_hit(l, balls) else {
+            return false;
+        };
+        self.broad.hint_part = k;
+        self.broad.hint_streak = 1;
+        true
     }
 
     /// World centres of link `l`'s part spheres, computed once per check.
@@ -724,25 +721,19 @@ impl RobotValidity {
         if self.fixed_blocked() {
             return true;
         }
+        // After a check that one part settled: that part alone first.
+        if let Some((_, l, k)) = self.hinted_part()
+            && self.part_hits(l, k).is_some()
+        {
+            self.broad.hint_streak += 1;
+            return true;
+        }
         let first = match self.broad.hint {
-            // After a check that this link's part settled: that part alone first.
-            Hint::Link(i) => {
-                let l = self.geometric[i];
-                let k = self.broad.hint_part;
-                if self.broad.hint_streak > 0 && self.broad.part_range[l].contains(&k) && self.part_hits(l, k).is_some()
-                {
-                    self.broad.hint_streak += 1;
-                    return true;
-                }
-                self.link_blocked(i)
-            }
+            Hint::Link(i) => self.link_blocked(i),
             Hint::Pair(i) => self.pair_blocked(i),
             Hint::None => false,
         };
         if first {
-            if matches!(self.broad.hint, Hint::Pair(_)) {
-                self.broad.hint_streak = 0;
-            }
             return true;
         }
         let skip = self.broad.hint;
@@ -774,7 +765,6 @@ impl RobotValidity {
         for i in 0..self.pairs.len() {
             if self.pair_moves[i] && skip != Hint::Pair(i) && self.pair_blocked(i) {
                 self.broad.hint = Hint::Pair(i);
-                self.broad.hint_streak = 0;
                 return true;
             }
         }
