@@ -38,6 +38,16 @@ pub struct LazyPrmSettings {
     /// searches are a large share of the time; 1.5 solved 1–3 % more MotionBenchMaker
     /// bookshelf problems within 1 s than the exact search (`docs/benchmarks.md`).
     pub search_weight: f64,
+    /// Share of each batch spent growing a *wedged* query end (default 0.5; 0 turns it off):
+    /// when no candidate path is left and the start's or a goal's part of the roadmap holds
+    /// at most an eighth of its vertices, that part grows like an RRT tree — steps of
+    /// `tree_step` × `range` from its vertex nearest a uniform sample, each checked at once and
+    /// kept as a valid edge, each new vertex joined lazily to its nearest roadmap vertices. A
+    /// goal between shelf boards, whose long lazy edges all fail, otherwise gets about `k`
+    /// new edge attempts per batch however large the batch.
+    pub tree_share: f64,
+    /// Step of the wedged-end growth as a fraction of `range` (default 0.25).
+    pub tree_step: f64,
 }
 
 impl Default for LazyPrmSettings {
@@ -49,6 +59,8 @@ impl Default for LazyPrmSettings {
             enhance: 0.5,
             enhance_radius: None,
             search_weight: 1.5,
+            tree_share: 0.5,
+            tree_step: 0.25,
         }
     }
 }
@@ -59,6 +71,10 @@ impl Default for LazyPrmSettings {
 /// and the search repeated. When no candidate is left, the roadmap grows by a batch of samples
 /// (half of them, by default, near the ends of edges that failed: node enhancement), and the
 /// start and goal vertices are joined to their new nearest neighbours, while the budget lasts.
+/// A query end that stays cut off in a small part of a large roadmap (a grasp between shelf
+/// boards) is *wedged*: half of each batch then grows that part like an RRT tree, in steps
+/// checked at once ([`LazyPrmSettings::tree_share`]), until its new vertices' lazy edges reach
+/// the rest of the roadmap.
 ///
 /// Vertices are checked when sampled, unlike Bohlin & Kavraki's fully lazy original: one
 /// state check costs about a microsecond here, far less than the neighbour query and the
@@ -123,6 +139,11 @@ struct Roadmap {
     scratch: SearchScratch,
     /// Neighbour ids of the vertex being added (reused, so adding allocates only its edges).
     near: Vec<usize>,
+    /// The start's and the goals' parts of the roadmap while they are wedged (empty when not).
+    wedged: [Vec<u32>; 2],
+    /// Breadth-first search stamps: a vertex was reached in the walk numbered `walk`.
+    seen: Vec<u32>,
+    walk: u32,
 }
 
 /// How many failure points node enhancement remembers.
@@ -168,6 +189,71 @@ impl Roadmap {
             next_failure: 0,
             scratch: SearchScratch::default(),
             near: Vec::new(),
+            wedged: [Vec::new(), Vec::new()],
+            seen: Vec::new(),
+            walk: 0,
+        }
+    }
+
+    /// Collects into `wedged[side]` the vertices joined to `from` (by edges not found
+    /// invalid), and keeps them only if there are at most `limit`: whether they were few.
+    fn wedged_part(&mut self, side: usize, from: &[u32], limit: usize) -> bool {
+        self.walk = self.walk.wrapping_add(1);
+        if self.walk == 0 {
+            self.seen.fill(0);
+            self.walk = 1;
+        }
+        self.seen.resize(self.adjacency.len(), 0);
+        let part = &mut self.wedged[side];
+        part.clear();
+        for &v in from {
+            if self.seen[v as usize] != self.walk {
+                self.seen[v as usize] = self.walk;
+                part.push(v);
+            }
+        }
+        let mut next = 0;
+        while next < part.len() && part.len() <= limit {
+            for &u in &self.adjacency[part[next] as usize] {
+                if self.seen[u as usize] != self.walk {
+                    self.seen[u as usize] = self.walk;
+                    part.push(u);
+                }
+            }
+            next += 1;
+        }
+        if part.len() > limit {
+            part.clear();
+        }
+        !part.is_empty()
+    }
+
+    /// The vertex of `wedged[side]` nearest `target` (the part is not empty).
+    fn nearest_wedged<S: Space>(&self, space: &S, side: usize, target: &[f64]) -> u32 {
+        let mut best = (f64::INFINITY, self.wedged[side][0]);
+        for &v in &self.wedged[side] {
+            let d = space.distance(self.nn.state(v as usize), target);
+            if d < best.0 {
+                best = (d, v);
+            }
+        }
+        best.1
+    }
+
+    /// Adds the state `q`, reached from vertex `from` by a motion found valid, with that edge
+    /// marked valid, to the roadmap and to `wedged[side]`.
+    fn add_reached<S: Space>(&mut self, space: &S, side: usize, from: u32, q: &[f64], k: usize, range: f64) {
+        let v = self.add(space, q, k, range);
+        if v == from {
+            return;
+        }
+        if !self.adjacency[from as usize].contains(&v) {
+            self.adjacency[from as usize].push(v);
+            self.adjacency[v as usize].push(from);
+        }
+        self.valid_edges.insert(edge(from, v));
+        if !self.wedged[side].contains(&v) {
+            self.wedged[side].push(v);
         }
     }
 
@@ -395,6 +481,19 @@ impl<S: Space> Planner<S> for LazyPrm {
                 "search_weight is {weight}; it must be finite and at least 1"
             )));
         }
+        let tree_share = self.settings.tree_share;
+        if !(0.0..=1.0).contains(&tree_share) {
+            return Err(PlanError::BadInput(format!(
+                "tree_share is {tree_share}; it must be in [0, 1]"
+            )));
+        }
+        let tree_step = self.settings.tree_step * range;
+        if !(tree_step.is_finite() && tree_step > 0.0 && self.settings.tree_step <= 1.0) {
+            return Err(PlanError::BadInput(format!(
+                "tree_step is {}; it must be in (0, 1]",
+                self.settings.tree_step
+            )));
+        }
         let goals = valid_goals(space, validator, request, budget)?;
         let dim = space.dim();
         let roadmap = match &mut self.roadmap {
@@ -405,6 +504,7 @@ impl<S: Space> Planner<S> for LazyPrm {
         let goal_ids: Vec<u32> = goals.iter().map(|g| roadmap.add(space, g, k, range)).collect();
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
+        let mut near_from = vec![0.0; dim];
         'search: loop {
             if let Some(path) = roadmap.search(motion.space(), start, &goal_ids, weight) {
                 if !run.next() {
@@ -437,12 +537,40 @@ impl<S: Space> Planner<S> for LazyPrm {
                 });
             }
             let grow = self.settings.batch.max(roadmap.nn.len() / 4).max(1);
+            // A query end whose part of the roadmap stays small once the roadmap is not.
+            let wedged = if tree_share > 0.0 && roadmap.nn.len() >= 4 * self.settings.batch.max(1) {
+                let limit = roadmap.nn.len() / 8;
+                [
+                    roadmap.wedged_part(0, &[start], limit),
+                    roadmap.wedged_part(1, &goal_ids, limit),
+                ]
+            } else {
+                [false; 2]
+            };
+            let mut turn = 0;
             for _ in 0..grow {
                 if !run.next() {
                     break 'search;
                 }
                 let space = motion.space();
                 space.sample(rng, &mut sample);
+                if (wedged[0] || wedged[1]) && rng.random_bool(tree_share) {
+                    // An RRT step of the wedged part (the two take turns when both are).
+                    turn = if wedged[0] && wedged[1] { 1 - turn } else { usize::from(wedged[1]) };
+                    let from = roadmap.nearest_wedged(space, turn, &sample);
+                    let q_from = roadmap.nn.state(from as usize);
+                    let d = space.distance(q_from, &sample);
+                    if d > tree_step {
+                        space.interpolate(q_from, &sample, tree_step / d, &mut near);
+                    } else {
+                        near.copy_from_slice(&sample);
+                    }
+                    near_from.copy_from_slice(q_from);
+                    if validator.is_valid(&near) && motion.check_motion(validator, &near_from, &near) {
+                        roadmap.add_reached(motion.space(), turn, from, &near, k, range);
+                    }
+                    continue;
+                }
                 let failures = roadmap.failures.len() / dim;
                 if failures > 0 && rng.random_bool(enhance) {
                     // A point within `enhance_radius` of a random failure, towards the sample.

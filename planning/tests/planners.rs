@@ -665,6 +665,25 @@ fn bad_input_is_named() {
         );
         assert_eq!(prm.roadmap_size(), 0, "bad settings leave the roadmap untouched");
     }
+    for (share, step, needle) in [
+        (-0.1, 0.25, "tree_share is -0.1"),
+        (f64::NAN, 0.25, "tree_share is NaN"),
+        (0.5, 0.0, "tree_step is 0"),
+        (0.5, 1.5, "tree_step is 1.5"),
+        (0.5, f64::NAN, "tree_step is NaN"),
+    ] {
+        let mut prm = LazyPrm::new(LazyPrmSettings {
+            tree_share: share,
+            tree_step: step,
+            ..Default::default()
+        });
+        let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::BadInput(m) if m.contains(needle)),
+            "{needle}: {e}"
+        );
+        assert_eq!(prm.roadmap_size(), 0, "bad settings leave the roadmap untouched");
+    }
 }
 
 #[test]
@@ -978,6 +997,8 @@ fn lazy_prm_node_enhancement_reaches_a_goal_in_a_slot() {
                 let mut rng = Pcg64Mcg::seed_from_u64(seed);
                 let mut prm = LazyPrm::new(LazyPrmSettings {
                     enhance,
+                    // Node enhancement alone.
+                    tree_share: 0.0,
                     ..Default::default()
                 });
                 let s = prm
@@ -993,4 +1014,48 @@ fn lazy_prm_node_enhancement_reaches_a_goal_in_a_slot() {
     let (uniform, enhanced) = (median_size(0.0), median_size(0.5));
     println!("slot: median roadmap size when solved: uniform {uniform}, enhanced {enhanced}");
     assert!(4 * enhanced < 3 * uniform, "enhanced {enhanced}, uniform {uniform}");
+}
+
+#[test]
+fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
+    // The goal of `pocket` at the closed end of its corridor, in a 2 × 2 square around the
+    // block, with four free dimensions more (6-D, as the roadmap's arms are high-dimensional):
+    // lazy edges into the corridor fail unless they end in it, and out of it unless they
+    // leave through the hole. Growing the goal's part like a tree gets it out.
+    let (mut lo, mut hi) = (vec![99.75, 99.5], vec![101.75, 101.5]);
+    lo.extend([0.0; 4]);
+    hi.extend([1.0; 4]);
+    let space = JointSpace::new(&lo, &hi, &[false; 6]).unwrap();
+    let request = PlanRequest::new(
+        vec![99.85, 99.6, 0.5, 0.5, 0.5, 0.5],
+        Goal::Config(vec![100.88, 100.5, 0.5, 0.5, 0.5, 0.5]),
+    );
+    let mut v = pocket();
+    // Iterations to a solution (the budget when none), median over 15 seeds.
+    let mut median_iterations = |tree_share: f64| {
+        let mut its: Vec<u64> = (0..15)
+            .map(|seed| {
+                let mut motion = MotionValidator::new(space.clone(), POCKET_RESOLUTION);
+                let mut rng = Pcg64Mcg::seed_from_u64(seed);
+                let mut prm = LazyPrm::new(LazyPrmSettings {
+                    range: Some(0.4),
+                    tree_share,
+                    ..Default::default()
+                });
+                match prm.plan(&mut motion, &mut v, &request, &budget(40_000), &mut rng) {
+                    Ok(s) => {
+                        check_solution(&space, POCKET_RESOLUTION, &mut v, &request, &s);
+                        s.stats.iterations
+                    }
+                    Err(PlanError::Timeout { stats }) => stats.iterations,
+                    Err(e) => panic!("seed {seed}: {e}"),
+                }
+            })
+            .collect();
+        its.sort_unstable();
+        its[its.len() / 2]
+    };
+    let (without, with) = (median_iterations(0.0), median_iterations(0.5));
+    println!("pocket: median LazyPRM iterations: without wedged-end growth {without}, with {with}");
+    assert!(2 * with < without, "with {with}, without {without}");
 }
