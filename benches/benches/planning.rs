@@ -3,8 +3,8 @@
 //! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths.
 //! Each plan uses the same seed, so every iteration plans the same path. `nn/…` times one
 //! nearest-neighbour query (and one query for the 10 nearest) among 20,000 random Panda
-//! configurations, with k-d trees (the Panda's bounded joints) and with vantage-point trees
-//! (the same space with its first joint made continuous, which k-d trees cannot index).
+//! configurations, with k-d trees (the Panda's bounded joints) and with k-d trees
+//! on the torus (the same space with its first joint made continuous).
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -140,9 +140,9 @@ fn nearest_neighbours(c: &mut Criterion) {
     let mut continuous = [false; 7];
     let kd = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
     continuous[0] = true;
-    let vp = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
+    let torus = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
     let mut g = c.benchmark_group("nn");
-    for (name, space) in [("nearest_20k_kd", kd), ("nearest_20k_vp", vp)] {
+    for (name, space) in [("nearest_20k_kd", kd), ("nearest_20k_torus", torus)] {
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
         let mut nn = NearestNeighbors::new(7);
         let mut q = [0.0; 7];

@@ -556,7 +556,11 @@ impl<S: Space> Planner<S> for LazyPrm {
                 space.sample(rng, &mut sample);
                 if (wedged[0] || wedged[1]) && rng.random_bool(tree_share) {
                     // An RRT step of the wedged part (the two take turns when both are).
-                    turn = if wedged[0] && wedged[1] { 1 - turn } else { usize::from(wedged[1]) };
+                    turn = if wedged[0] && wedged[1] {
+                        1 - turn
+                    } else {
+                        usize::from(wedged[1])
+                    };
                     let from = roadmap.nearest_wedged(space, turn, &sample);
                     let q_from = roadmap.nn.state(from as usize);
                     let d = space.distance(q_from, &sample);

@@ -78,6 +78,37 @@ proptest! {
         agrees_with_brute_force(&euclidean_space(), seed, n, remove, k, 1.0);
     }
 
+    /// Angles given unwrapped (a state at 3.0 + 4π is the state at 3.0), as a user may pass
+    /// them: the k-d trees on the torus wrap them and still agree with the space's metric.
+    #[test]
+    fn unwrapped_angles(seed in any::<u64>(), n in 1usize..400, k in 1usize..12, turns in proptest::collection::vec(-3i32..=3, 8)) {
+        let space = joint_space();
+        prop_assert!(space.euclidean_weights().is_none() && space.wrapping_weights().is_some());
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let mut nn = NearestNeighbors::new(4);
+        let mut states = Vec::new();
+        let mut q = vec![0.0; 4];
+        let unwrap = |q: &mut Vec<f64>, i: usize| {
+            q[1] += f64::from(turns[i % 8]) * std::f64::consts::TAU;
+            q[2] -= f64::from(turns[(i + 3) % 8]) * std::f64::consts::TAU;
+        };
+        for i in 0..n {
+            space.sample(&mut rng, &mut q);
+            unwrap(&mut q, i);
+            nn.insert(&q);
+            states.push(q.clone());
+        }
+        for j in 0..20 {
+            space.sample(&mut rng, &mut q);
+            unwrap(&mut q, j + 1);
+            let mut by_distance: Vec<(f64, usize)> =
+                states.iter().enumerate().map(|(i, p)| (space.distance(&q, p), i)).collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let expected: Vec<usize> = by_distance.iter().take(k).map(|e| e.1).collect();
+            prop_assert_eq!(nn.k_nearest(&space, &q, k), expected);
+        }
+    }
+
     #[test]
     fn se2_space_with_wrapping_yaw(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
         agrees_with_brute_force(&se2_space(), seed, n, remove, k, 0.8);
@@ -263,7 +294,8 @@ fn interleaved_agrees_with_brute_force<S: Space>(space: &S, n: usize) {
 
 #[test]
 fn no_state_is_lost_when_trees_merge() {
-    // Vantage-point trees (a wrapping joint) and k-d trees (bounded joints only).
+    // k-d trees on the torus (wrapping joints), k-d trees (bounded joints only) and
+    // vantage-point trees (SE(2), whose yaw adds to the planar distance).
     interleaved_agrees_with_brute_force(&joint_space(), 6_000);
     let bounded = JointSpace::new(&[0.0; 7], &[1.0; 7], &[false; 7]).unwrap();
     assert!(bounded.euclidean_weights().is_some());

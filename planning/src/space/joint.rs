@@ -286,4 +286,8 @@ impl Space for JointSpace {
     fn euclidean_weights(&self) -> Option<&[f64]> {
         (!self.continuous.contains(&true)).then_some(&self.weights[..])
     }
+
+    fn wrapping_weights(&self) -> Option<(&[f64], &[bool])> {
+        Some((&self.weights, &self.continuous))
+    }
 }

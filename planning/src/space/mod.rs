@@ -125,6 +125,23 @@ pub trait Space: Send + Sync {
     fn euclidean_weights(&self) -> Option<&[f64]> {
         None
     }
+
+    /// `Some((w, wraps))` when [`Space::distance`] is `√Σ (wᵢ dᵢ)²`, where `dᵢ = bᵢ − aᵢ` for a
+    /// coordinate with `wraps[i]` false and that difference wrapped into `(−π, π]` (an angle)
+    /// for one with `wraps[i]` true: nearest-neighbour search then uses k-d trees on the torus.
+    /// The default, `None`, makes no such promise.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let wrapping = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// let (weights, wraps) = wrapping.wrapping_weights().unwrap();
+    /// assert_eq!((weights, wraps), (&[1.0, 1.0][..], &[false, true][..]));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    fn wrapping_weights(&self) -> Option<(&[f64], &[bool])> {
+        None
+    }
 }
 
 /// Writes into `out` the point at a uniform random distance of at most `radius` from `centre`
