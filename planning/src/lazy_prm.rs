@@ -38,7 +38,7 @@ pub struct LazyPrmSettings {
     /// searches are a large share of the time; 1.5 solved 1–3 % more MotionBenchMaker
     /// bookshelf problems within 1 s than the exact search (`docs/benchmarks.md`).
     pub search_weight: f64,
-    /// Share of each batch spent growing a *wedged* query end (default 0.5; 0 turns it off):
+    /// Share of each batch spent growing a *wedged* query end (default 0.9; 0 turns it off):
     /// when no candidate path is left and the start's or a goal's part of the roadmap holds
     /// at most an eighth of its vertices, that part grows like an RRT tree — steps of
     /// `tree_step` × `range` from its vertex nearest a uniform sample, each checked at once and
@@ -59,7 +59,7 @@ impl Default for LazyPrmSettings {
             enhance: 0.5,
             enhance_radius: None,
             search_weight: 1.5,
-            tree_share: 0.5,
+            tree_share: 0.9,
             tree_step: 0.25,
         }
     }
@@ -72,7 +72,7 @@ impl Default for LazyPrmSettings {
 /// (half of them, by default, near the ends of edges that failed: node enhancement), and the
 /// start and goal vertices are joined to their new nearest neighbours, while the budget lasts.
 /// A query end that stays cut off in a small part of a large roadmap (a grasp between shelf
-/// boards) is *wedged*: half of each batch then grows that part like an RRT tree, in steps
+/// boards) is *wedged*: most of each batch then grows that part like an RRT tree, in steps
 /// checked at once ([`LazyPrmSettings::tree_share`]), until its new vertices' lazy edges reach
 /// the rest of the roadmap.
 ///

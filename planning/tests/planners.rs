@@ -1055,7 +1055,7 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
         its.sort_unstable();
         its[its.len() / 2]
     };
-    let (without, with) = (median_iterations(0.0), median_iterations(0.5));
+    let (without, with) = (median_iterations(0.0), median_iterations(LazyPrmSettings::default().tree_share));
     println!("pocket: median LazyPRM iterations: without wedged-end growth {without}, with {with}");
     assert!(2 * with < without, "with {with}, without {without}");
 }
