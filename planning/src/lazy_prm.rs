@@ -39,7 +39,7 @@ pub struct LazyPrmSettings {
     /// bookshelf problems within 1 s than the exact search (`docs/benchmarks.md`).
     pub search_weight: f64,
     /// Share of each batch spent growing a *wedged* query end (default 0.9; 0 turns it off):
-    /// when no candidate path is left and the start's or a goal's part of the roadmap holds
+    /// when no candidate path is left and the start's or the goals' part of the roadmap holds
     /// at most an eighth of its vertices, that part grows like an RRT tree — steps of
     /// `tree_step` × `range` from its vertex nearest a uniform sample, each checked at once and
     /// kept as a valid edge, each new vertex joined lazily to its nearest roadmap vertices. A
