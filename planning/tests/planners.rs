@@ -644,39 +644,29 @@ fn bad_input_is_named() {
         ..Default::default()
     });
     assert!(bad(prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng)));
-    for (enhance, radius, weight, needle) in [
-        (1.5, None, 1.5, "enhance is 1.5"),
-        (f64::NAN, None, 1.5, "enhance is NaN"),
-        (0.5, Some(0.0), 1.5, "enhance_radius is 0"),
-        (0.5, Some(f64::INFINITY), 1.5, "enhance_radius is inf"),
-        (0.5, None, 0.5, "search_weight is 0.5"),
-        (0.5, None, f64::NAN, "search_weight is NaN"),
-    ] {
-        let mut prm = LazyPrm::new(LazyPrmSettings {
-            enhance,
-            enhance_radius: radius,
-            search_weight: weight,
-            ..Default::default()
-        });
-        let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
-        assert!(
-            matches!(&e, PlanError::BadInput(m) if m.contains(needle)),
-            "{needle}: {e}"
-        );
-        assert_eq!(prm.roadmap_size(), 0, "bad settings leave the roadmap untouched");
-    }
-    for (share, step, needle) in [
-        (-0.1, 0.25, "tree_share is -0.1"),
-        (f64::NAN, 0.25, "tree_share is NaN"),
-        (0.5, 0.0, "tree_step is 0"),
-        (0.5, 1.5, "tree_step is 1.5"),
-        (0.5, f64::NAN, "tree_step is NaN"),
-    ] {
-        let mut prm = LazyPrm::new(LazyPrmSettings {
-            tree_share: share,
-            tree_step: step,
-            ..Default::default()
-        });
+    let with = |f: fn(&mut LazyPrmSettings)| {
+        let mut s = LazyPrmSettings::default();
+        f(&mut s);
+        s
+    };
+    let cases: [(LazyPrmSettings, &str); 11] = [
+        (with(|s| s.enhance = 1.5), "enhance is 1.5"),
+        (with(|s| s.enhance = f64::NAN), "enhance is NaN"),
+        (with(|s| s.enhance_radius = Some(0.0)), "enhance_radius is 0"),
+        (
+            with(|s| s.enhance_radius = Some(f64::INFINITY)),
+            "enhance_radius is inf",
+        ),
+        (with(|s| s.search_weight = 0.5), "search_weight is 0.5"),
+        (with(|s| s.search_weight = f64::NAN), "search_weight is NaN"),
+        (with(|s| s.tree_share = -0.1), "tree_share is -0.1"),
+        (with(|s| s.tree_share = f64::NAN), "tree_share is NaN"),
+        (with(|s| s.tree_step = 0.0), "tree_step is 0"),
+        (with(|s| s.tree_step = 1.5), "tree_step is 1.5"),
+        (with(|s| s.tree_step = f64::NAN), "tree_step is NaN"),
+    ];
+    for (settings, needle) in cases {
+        let mut prm = LazyPrm::new(settings);
         let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
         assert!(
             matches!(&e, PlanError::BadInput(m) if m.contains(needle)),
@@ -1055,7 +1045,10 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
         its.sort_unstable();
         its[its.len() / 2]
     };
-    let (without, with) = (median_iterations(0.0), median_iterations(LazyPrmSettings::default().tree_share));
+    let (without, with) = (
+        median_iterations(0.0),
+        median_iterations(LazyPrmSettings::default().tree_share),
+    );
     println!("pocket: median LazyPRM iterations: without wedged-end growth {without}, with {with}");
     assert!(2 * with < without, "with {with}, without {without}");
 }
