@@ -1051,4 +1051,19 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
     );
     println!("pocket: median LazyPRM iterations: without wedged-end growth {without}, with {with}");
     assert!(2 * with < without, "with {with}, without {without}");
+    // The growth draws from the planner's generator only: same seed, same path.
+    solve(
+        "pocket/lazy_prm",
+        || {
+            LazyPrm::new(LazyPrmSettings {
+                range: Some(0.4),
+                ..Default::default()
+            })
+        },
+        &space,
+        POCKET_RESOLUTION,
+        &mut v,
+        &request,
+        &budget(40_000),
+    );
 }
