@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
-use crate::space::Space;
+use crate::space::{Space, steer};
 use crate::validity::StateValidator;
 
 /// RRT-Connect: a tree from the start and a tree from the goals (seeded with every valid goal),
@@ -271,12 +271,7 @@ impl Stepper {
         target: &[f64],
         range: f64,
     ) -> bool {
-        let d = motion.space().distance(from, target);
-        if d <= range {
-            self.step.copy_from_slice(target);
-        } else {
-            motion.space().interpolate(from, target, range / d, &mut self.step);
-        }
+        steer(motion.space(), from, target, range, &mut self.step);
         validator.is_valid(&self.step) && motion.check_motion(validator, from, &self.step)
     }
 

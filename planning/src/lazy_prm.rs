@@ -10,7 +10,7 @@ use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::nn::NearestNeighbors;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, resolve_range, valid_goals};
-use crate::space::{Space, pull_towards};
+use crate::space::{Space, pull_towards, steer};
 use crate::validity::StateValidator;
 
 /// Settings of [`LazyPrm`], serde-derivable so a TOML file can set them.
@@ -504,7 +504,6 @@ impl<S: Space> Planner<S> for LazyPrm {
         let goal_ids: Vec<u32> = goals.iter().map(|g| roadmap.add(space, g, k, range)).collect();
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
-        let mut near_from = vec![0.0; dim];
         'search: loop {
             if let Some(path) = roadmap.search(motion.space(), start, &goal_ids, weight) {
                 if !run.next() {
@@ -563,14 +562,8 @@ impl<S: Space> Planner<S> for LazyPrm {
                     };
                     let from = roadmap.nearest_wedged(space, turn, &sample);
                     let q_from = roadmap.nn.state(from as usize);
-                    let d = space.distance(q_from, &sample);
-                    if d > tree_step {
-                        space.interpolate(q_from, &sample, tree_step / d, &mut near);
-                    } else {
-                        near.copy_from_slice(&sample);
-                    }
-                    near_from.copy_from_slice(q_from);
-                    if validator.is_valid(&near) && motion.check_motion(validator, &near_from, &near) {
+                    steer(space, q_from, &sample, tree_step, &mut near);
+                    if validator.is_valid(&near) && motion.check_motion(validator, q_from, &near) {
                         roadmap.add_reached(motion.space(), turn, from, &near, k, range);
                     }
                     continue;

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
-use crate::space::{Space, pull_towards};
+use crate::space::{Space, pull_towards, steer};
 use crate::validity::StateValidator;
 
 /// RRT: one tree grown from the start towards random samples (towards a random goal with
@@ -158,14 +158,8 @@ impl<S: Space> Planner<S> for Rrt {
                 space.sample(rng, &mut target);
             }
             let near = tree.nn.nearest(space, &target).expect("the tree holds the start");
-            let d = space.distance(tree.state(near), &target);
-            if d == 0.0 {
+            if steer(space, tree.state(near), &target, range, &mut step) == 0.0 {
                 continue;
-            }
-            if d > range {
-                space.interpolate(tree.state(near), &target, range / d, &mut step);
-            } else {
-                step.copy_from_slice(&target);
             }
             if !validator.is_valid(&step) {
                 continue;

@@ -144,6 +144,19 @@ pub trait Space: Send + Sync {
     }
 }
 
+/// Writes into `out` the state `range` from `from` on the way to `target`, or `target` itself
+/// when it is no farther: the step of a tree planner towards a sample. Returns the distance
+/// from `from` to `target`.
+pub(crate) fn steer<S: Space + ?Sized>(space: &S, from: &[f64], target: &[f64], range: f64, out: &mut [f64]) -> f64 {
+    let d = space.distance(from, target);
+    if d > range {
+        space.interpolate(from, target, range / d, out);
+    } else {
+        out.copy_from_slice(target);
+    }
+    d
+}
+
 /// Writes into `out` the point at a uniform random distance of at most `radius` from `centre`
 /// on the way to `towards` (all of `towards` when it is nearer): a uniform sample `towards`
 /// pulled into the neighbourhood of `centre`. Used to sample near goals (RRT's goal zone) and
