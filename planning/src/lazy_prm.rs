@@ -125,7 +125,8 @@ pub struct LazyPrm {
 struct Roadmap {
     /// The vertices, all valid states.
     nn: NearestNeighbors,
-    adjacency: Vec<Vec<u32>>,
+    /// Per vertex: its neighbours and the length of the edge to each.
+    adjacency: Vec<Vec<(u32, f64)>>,
     /// Edges checked valid, as (lower id, higher id).
     valid_edges: HashSet<(u32, u32)>,
     /// Edges found invalid (removed, never joined again).
@@ -137,6 +138,15 @@ struct Roadmap {
     next_failure: usize,
     /// The graph search's arrays.
     scratch: SearchScratch,
+    /// Each vertex's roadmap distance to the nearest goal (infinite when no goal is joined to
+    /// it), computed by one search from the goals when edges were added since: the graph
+    /// search's heuristic. Removing an edge can only lengthen distances, so between additions
+    /// these stay a consistent lower bound.
+    to_goal: Vec<f64>,
+    /// `edges_added` and the goals when `to_goal` was computed.
+    to_goal_of: Option<(u64, Vec<u32>)>,
+    /// Edges added to the roadmap so far.
+    edges_added: u64,
     /// Neighbour ids of the vertex being added (reused, so adding allocates only its edges).
     near: Vec<usize>,
     /// The start's and the goals' parts of the roadmap while they are wedged (empty when not).
@@ -188,6 +198,9 @@ impl Roadmap {
             failures: Vec::new(),
             next_failure: 0,
             scratch: SearchScratch::default(),
+            to_goal: Vec::new(),
+            to_goal_of: None,
+            edges_added: 0,
             near: Vec::new(),
             wedged: [Vec::new(), Vec::new()],
             seen: Vec::new(),
@@ -214,7 +227,7 @@ impl Roadmap {
         }
         let mut next = 0;
         while next < part.len() && part.len() <= limit {
-            for &u in &self.adjacency[part[next] as usize] {
+            for &(u, _) in &self.adjacency[part[next] as usize] {
                 if self.seen[u as usize] != self.walk {
                     self.seen[u as usize] = self.walk;
                     part.push(u);
@@ -247,9 +260,11 @@ impl Roadmap {
         if v == from {
             return;
         }
-        if !self.adjacency[from as usize].contains(&v) {
-            self.adjacency[from as usize].push(v);
-            self.adjacency[v as usize].push(from);
+        if !self.adjacency[from as usize].iter().any(|&(u, _)| u == v) {
+            let d = space.distance(self.nn.state(from as usize), q);
+            self.adjacency[from as usize].push((v, d));
+            self.adjacency[v as usize].push((from, d));
+            self.edges_added += 1;
         }
         self.valid_edges.insert(edge(from, v));
         if !self.wedged[side].contains(&v) {
@@ -283,11 +298,13 @@ impl Roadmap {
         let v = self.nn.insert(q) as u32;
         let mut adjacent = Vec::with_capacity(k);
         for &u in &near {
-            if space.distance(self.nn.state(u), q) <= range {
-                adjacent.push(u as u32);
-                self.adjacency[u].push(v);
+            let d = space.distance(self.nn.state(u), q);
+            if d <= range {
+                adjacent.push((u as u32, d));
+                self.adjacency[u].push((v, d));
             }
         }
+        self.edges_added += adjacent.len() as u64;
         self.adjacency.push(adjacent);
         self.near = near;
         v
@@ -299,13 +316,17 @@ impl Roadmap {
         let q = self.nn.state(v as usize).to_vec();
         for u in self.nn.k_nearest(space, &q, k + 1) {
             let u = u as u32;
-            if u != v
-                && !self.adjacency[v as usize].contains(&u)
-                && !self.invalid_edges.contains(&edge(u, v))
-                && space.distance(self.nn.state(u as usize), &q) <= range
+            if u == v
+                || self.adjacency[v as usize].iter().any(|&(w, _)| w == u)
+                || self.invalid_edges.contains(&edge(u, v))
             {
-                self.adjacency[v as usize].push(u);
-                self.adjacency[u as usize].push(v);
+                continue;
+            }
+            let d = space.distance(self.nn.state(u as usize), &q);
+            if d <= range {
+                self.adjacency[v as usize].push((u, d));
+                self.adjacency[u as usize].push((v, d));
+                self.edges_added += 1;
             }
         }
     }
@@ -317,23 +338,68 @@ impl Roadmap {
             self.note_failure_of(v);
         }
         self.invalid_edges.insert(edge(a, b));
-        self.adjacency[a as usize].retain(|&w| w != b);
-        self.adjacency[b as usize].retain(|&w| w != a);
+        self.adjacency[a as usize].retain(|&(w, _)| w != b);
+        self.adjacency[b as usize].retain(|&(w, _)| w != a);
+    }
+
+    /// Fills `to_goal` with every vertex's roadmap distance to the nearest of `goals`
+    /// (Dijkstra from the goals), unless no edge was added since it was last computed for them.
+    fn update_to_goal(&mut self, goals: &[u32]) {
+        let current = self.to_goal_of.as_ref().is_some_and(|(added, g)| *added == self.edges_added && g == goals);
+        if current {
+            return;
+        }
+        let Self {
+            adjacency,
+            scratch,
+            to_goal,
+            ..
+        } = self;
+        scratch.begin(adjacency.len());
+        to_goal.clear();
+        to_goal.resize(adjacency.len(), f64::INFINITY);
+        for &g in goals {
+            scratch.improve(g, 0.0, u32::MAX);
+            scratch.open.push(Reverse((Key(0.0), g)));
+        }
+        while let Some(Reverse((_, v))) = scratch.open.pop() {
+            if !scratch.close(v) {
+                continue;
+            }
+            let cv = scratch.cost(v);
+            to_goal[v as usize] = cv;
+            for &(u, d) in &adjacency[v as usize] {
+                if scratch.is_closed(u) {
+                    continue;
+                }
+                let c = cv + d;
+                if c < scratch.cost(u) {
+                    scratch.improve(u, c, v);
+                    scratch.open.push(Reverse((Key(c), u)));
+                }
+            }
+        }
+        self.to_goal_of = Some((self.edges_added, goals.to_vec()));
     }
 
     /// A roadmap path from `start` to any of `goals` at most `weight` times longer than the
-    /// shortest (weighted A*, heuristic: distance to the nearest goal), or `None`.
-    fn search<S: Space>(&mut self, space: &S, start: u32, goals: &[u32], weight: f64) -> Option<Vec<u32>> {
+    /// shortest, or `None` (weighted A*). The heuristic is each vertex's distance to the goals
+    /// in the roadmap as it was when edges were last added ([`Roadmap::update_to_goal`]):
+    /// exact until an edge fails, a lower bound after, and infinite where no goal can be
+    /// reached, so a search for a start cut off from the goals ends at once.
+    fn search(&mut self, start: u32, goals: &[u32], weight: f64) -> Option<Vec<u32>> {
+        self.update_to_goal(goals);
         let Self {
-            nn, adjacency, scratch, ..
+            adjacency,
+            scratch,
+            to_goal,
+            ..
         } = self;
+        let h = |v: u32| to_goal[v as usize];
+        if h(start).is_infinite() {
+            return None;
+        }
         scratch.begin(adjacency.len());
-        let h = |v: u32| {
-            goals
-                .iter()
-                .map(|&g| space.distance(nn.state(v as usize), nn.state(g as usize)))
-                .fold(f64::INFINITY, f64::min)
-        };
         scratch.improve(start, 0.0, u32::MAX);
         scratch.open.push(Reverse((Key(h(start)), start)));
         while let Some(Reverse((_, v))) = scratch.open.pop() {
@@ -350,12 +416,12 @@ impl Roadmap {
                 path.reverse();
                 return Some(path);
             }
-            let (qv, cv) = (nn.state(v as usize), scratch.cost(v));
-            for &u in &adjacency[v as usize] {
-                if scratch.is_closed(u) {
+            let cv = scratch.cost(v);
+            for &(u, d) in &adjacency[v as usize] {
+                if scratch.is_closed(u) || h(u).is_infinite() {
                     continue;
                 }
-                let c = cv + space.distance(qv, nn.state(u as usize));
+                let c = cv + d;
                 if c < scratch.cost(u) {
                     scratch.improve(u, c, v);
                     scratch.open.push(Reverse((Key(c + weight * h(u)), u)));
@@ -505,7 +571,7 @@ impl<S: Space> Planner<S> for LazyPrm {
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
         'search: loop {
-            if let Some(path) = roadmap.search(motion.space(), start, &goal_ids, weight) {
+            if let Some(path) = roadmap.search(start, &goal_ids, weight) {
                 if !run.next() {
                     break;
                 }
