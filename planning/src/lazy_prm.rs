@@ -345,7 +345,10 @@ impl Roadmap {
     /// Fills `to_goal` with every vertex's roadmap distance to the nearest of `goals`
     /// (Dijkstra from the goals), unless no edge was added since it was last computed for them.
     fn update_to_goal(&mut self, goals: &[u32]) {
-        let current = self.to_goal_of.as_ref().is_some_and(|(added, g)| *added == self.edges_added && g == goals);
+        let current = self
+            .to_goal_of
+            .as_ref()
+            .is_some_and(|(added, g)| *added == self.edges_added && g == goals);
         if current {
             return;
         }

@@ -208,6 +208,10 @@ struct BroadPhase {
     /// Per part (same indices as `parts`): its shape and its pose in the link frame, for
     /// exact tests of single parts.
     part_shape: Vec<(SharedShape, Isometry3<f64>)>,
+    /// Per part: a ball inside it (centre in the link frame, radius; radius 0 for none), for
+    /// parts whose exact test goes to parry's GJK. An obstacle that touches the ball touches
+    /// the part, so a hit there settles the part's test at the cost of a ball query.
+    part_inner: Vec<(Point3<f64>, f64)>,
     /// Per part: the balls of its link's cover (bit `k` = the `k`-th ball of the link's
     /// `cover_range`) that meet it. A part can touch an obstacle only where one of these
     /// balls does, so the exact test runs only on parts whose balls touched something.
@@ -306,6 +310,7 @@ impl BroadPhase {
             })
             .collect();
         let n_parts = parts.len();
+        let part_inner = part_shape.iter().map(inner_ball).collect();
         let part_cover = (0..n)
             .flat_map(|l| part_range[l].clone().map(move |k| (l, k)))
             .map(|(l, k)| cover_mask(&cover[cover_range[l].clone()], &part_shape[k]))
@@ -314,6 +319,7 @@ impl BroadPhase {
             cover_range,
             cover,
             part_shape,
+            part_inner,
             part_cover,
             moving: (0..geometric.len()).filter(|&i| link_moves[i]).collect(),
             batch: BallBatch::new(),
@@ -335,6 +341,43 @@ impl BroadPhase {
             hint_streak: 0,
         }
     }
+}
+
+/// Deepest a ball inside a part must sit below its surface, so that a ball touching an
+/// obstacle means the part's exact test reports contact whatever its tolerance.
+const INNER_BALL_SINK: f64 = 5e-4;
+/// Smallest inner ball worth a query (m).
+const INNER_BALL_MIN: f64 = 2e-3;
+
+/// A ball inside `part` (shape and pose in the link frame) for cylinders and convex
+/// polyhedra: centred on the cylinder's centre or the polyhedron's centre of mass, its radius
+/// that point's depth below the surface (the nearest cap or the side; the nearest face plane)
+/// less [`INNER_BALL_SINK`]. Radius 0 (no ball) for other shapes, whose exact tests are closed
+/// forms or rare, and where the ball would be smaller than [`INNER_BALL_MIN`].
+fn inner_ball(part: &(SharedShape, Isometry3<f64>)) -> (Point3<f64>, f64) {
+    let (shape, at) = part;
+    let (center, depth) = if let Some(c) = shape.as_cylinder() {
+        (Vector::ZERO, c.radius.min(c.half_height))
+    } else if let Some(p) = shape.as_convex_polyhedron() {
+        let com = shape.mass_properties(1.0).local_com;
+        let depth = p
+            .faces()
+            .iter()
+            .map(|f| {
+                let reach = p.points().iter().map(|v| v.dot(f.normal)).fold(f32::MIN, f32::max);
+                reach - com.dot(f.normal)
+            })
+            .fold(f32::MAX, f32::min);
+        (com, depth)
+    } else {
+        (Vector::ZERO, 0.0)
+    };
+    let r = f64::from(depth) - INNER_BALL_SINK;
+    if !(r >= INNER_BALL_MIN) {
+        return (Point3::origin(), 0.0);
+    }
+    let c = at * Point3::new(f64::from(center.x), f64::from(center.y), f64::from(center.z));
+    (c, r)
 }
 
 /// Which balls of a link's `cover` (inflated radii, link frame) meet `part` (shape and pose in
@@ -563,6 +606,14 @@ impl RobotValidity {
     #[inline]
     fn part_hits(&self, l: usize, k: usize) -> Option<ObstacleId> {
         let (shape, at) = &self.broad.part_shape[k];
+        let (c, r) = self.broad.part_inner[k];
+        if r > 0.0 {
+            let w = self.poses[l] * c;
+            let at_w = parry3d::math::Pose::from_translation(Vector::new(w.x as f32, w.y as f32, w.z as f32));
+            if let Some(id) = self.obstacles.first_hit(&Ball::new(r as f32), &at_w) {
+                return Some(id);
+            }
+        }
         self.obstacles
             .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))
     }
@@ -943,5 +994,77 @@ impl StateValidator for RobotValidity {
             start += m;
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on the surface of the ball (`centre`, `radius`), spread by a Fibonacci spiral.
+    fn surface(centre: Point3<f64>, radius: f64, n: usize) -> impl Iterator<Item = Vector> {
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        (0..n).map(move |i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let (s, c) = (golden * i as f64).sin_cos();
+            let ring = (1.0 - z * z).sqrt();
+            let p = centre + nalgebra::Vector3::new(ring * c, ring * s, z) * radius;
+            Vector::new(p.x as f32, p.y as f32, p.z as f32)
+        })
+    }
+
+    fn assert_inside(part: &SharedShape, what: &str) -> bool {
+        let (c, r) = inner_ball(&(part.clone(), Isometry3::identity()));
+        if r == 0.0 {
+            return false;
+        }
+        for p in surface(c, r + INNER_BALL_SINK * 0.5, 400) {
+            assert!(
+                part.contains_local_point(p),
+                "{what}: inner ball ({c}, {r}) leaves the part at {p}"
+            );
+        }
+        true
+    }
+
+    #[test]
+    fn a_short_cylinders_inner_ball_stays_between_its_caps() {
+        // parry projects a cylinder's centre onto its side when the caps are equally near,
+        // even when they are nearer than the side: the depth must be the nearer of the two.
+        let short = SharedShape::cylinder(0.03, 0.06);
+        assert!(assert_inside(&short, "short cylinder"));
+        let (_, r) = inner_ball(&(short, Isometry3::identity()));
+        assert!((r - (0.03 - INNER_BALL_SINK)).abs() < 1e-6, "radius {r}");
+        assert!(assert_inside(&SharedShape::cylinder(0.2, 0.05), "long cylinder"));
+        assert_eq!(
+            inner_ball(&(SharedShape::cuboid(0.1, 0.1, 0.1), Isometry3::identity())).1,
+            0.0
+        );
+    }
+
+    #[test]
+    fn every_inner_ball_of_the_builtin_robots_lies_inside_its_part() {
+        for name in ["panda", "fetch"] {
+            let model = RobotModel::builtin(name).unwrap();
+            let (mut parts, mut with_ball) = (0, 0);
+            for l in 0..model.links().len() {
+                let Some(s) = model.link_shape(l) else { continue };
+                let shapes: Vec<SharedShape> = match s.shape.as_compound() {
+                    Some(c) => c.shapes().iter().map(|(_, p)| p.clone()).collect(),
+                    None => vec![s.shape.clone()],
+                };
+                for part in &shapes {
+                    parts += 1;
+                    with_ball += usize::from(assert_inside(part, &format!("{name} link {l}")));
+                }
+            }
+            // Boxes and balls have none (their exact tests are closed forms); the links'
+            // convex hulls and cylinders do.
+            println!("{name}: {with_ball} of {parts} parts have an inner ball");
+            assert!(
+                with_ball >= 10,
+                "{name}: only {with_ball} of {parts} parts have an inner ball"
+            );
+        }
     }
 }
