@@ -373,7 +373,7 @@ fn inner_ball(part: &(SharedShape, Isometry3<f64>)) -> (Point3<f64>, f64) {
         (Vector::ZERO, 0.0)
     };
     let r = f64::from(depth) - INNER_BALL_SINK;
-    if !(r >= INNER_BALL_MIN) {
+    if r.is_nan() || r < INNER_BALL_MIN {
         return (Point3::origin(), 0.0);
     }
     let c = at * Point3::new(f64::from(center.x), f64::from(center.y), f64::from(center.z));
