@@ -398,7 +398,9 @@ impl Roadmap {
             to_goal,
             ..
         } = self;
-        let h = |v: u32| to_goal[v as usize];
+        // A vertex added since the distances were computed has no edge yet (any edge added
+        // would have brought a new computation), so no goal is joined to it.
+        let h = |v: u32| to_goal.get(v as usize).copied().unwrap_or(f64::INFINITY);
         if h(start).is_infinite() {
             return None;
         }

@@ -490,6 +490,28 @@ fn lazy_prm_reuses_its_roadmap_and_clears_it() {
     assert_eq!(prm.roadmap_size(), 0);
 }
 
+#[test]
+fn lazy_prm_takes_a_start_joined_to_nothing_for_a_goal_it_knows() {
+    // The first query stops after its first search, leaving a roadmap of its start and goal.
+    // The second asks for the same goal from a start farther than `range` from both, so the
+    // new start joins no edge: the search must treat it as cut off, then grow the roadmap.
+    let mut prm = LazyPrm::new(LazyPrmSettings {
+        range: Some(0.2),
+        ..Default::default()
+    });
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    let mut v = narrow_passage();
+    let mut rng = Pcg64Mcg::seed_from_u64(9);
+    let first = prm.plan(&mut motion, &mut v, &passage_request(), &budget(0), &mut rng);
+    assert!(matches!(first, Err(PlanError::Timeout { .. })), "{first:?}");
+    assert_eq!(prm.roadmap_size(), 2);
+    let request = PlanRequest::new(vec![0.1, 0.9], Goal::Config(vec![0.9, 0.1]));
+    let second = prm
+        .plan(&mut motion, &mut v, &request, &budget(200_000), &mut rng)
+        .unwrap();
+    check_solution(&square(), PASSAGE_RESOLUTION, &mut v, &request, &second);
+}
+
 /// Every planner, boxed behind a closure so the bad-input tests can run all of them.
 fn every_planner(
     request: &PlanRequest,
