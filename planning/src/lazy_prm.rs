@@ -32,8 +32,10 @@ pub struct LazyPrmSettings {
     pub enhance: f64,
     /// Samples near a failure lie within this distance of it; `None` is 0.4 × `range`.
     pub enhance_radius: Option<f64>,
-    /// Weight of the A* heuristic (default 1.5, at least 1): candidate paths are at most this
-    /// many times longer than the roadmap's shortest, and each search expands fewer vertices.
+    /// Weight of the A* heuristic (default 1.5, at least 1; the heuristic is each vertex's
+    /// roadmap distance to the goals, from one Dijkstra search after edges were added):
+    /// candidate paths are at most this many times longer than the roadmap's shortest, and
+    /// each search expands fewer vertices.
     /// A search runs after every candidate that fails its checks, so on large roadmaps the
     /// searches are a large share of the time; 1.5 solved 1–3 % more MotionBenchMaker
     /// bookshelf problems within 1 s than the exact search (`docs/benchmarks.md`).
