@@ -506,6 +506,9 @@ struct KdTree {
     /// Which coordinates are angles (empty: none). Their copies in `points` and the splits on
     /// them lie in `(−π, π]`.
     wraps: Vec<bool>,
+    /// Per coordinate of a tree with angles: 2π for an angle, infinity otherwise, so that the
+    /// leaves' short way round, `min(d, period − d)`, needs no branch (or mask) per coordinate.
+    periods: Vec<f64>,
 }
 
 impl KdTree {
@@ -518,6 +521,7 @@ impl KdTree {
             points: Vec::with_capacity(ids.len() * dim),
             nodes: Vec::new(),
             weights: weights.to_vec(),
+            periods: wraps.iter().map(|&w| if w { TAU } else { f64::INFINITY }).collect(),
             wraps,
         };
         tree.build_node(states, dim, &mut ids);
@@ -657,12 +661,11 @@ impl<S: Space> KdSearch<'_, S> {
                         }
                     } else {
                         // Both in (−π, π]: the short way round is the shorter of the two.
-                        for (((&x, &y), &w), &wraps) in self.wrapped.iter().zip(p).zip(&tree.weights).zip(&tree.wraps) {
-                            let mut d = (x - y).abs();
-                            if wraps {
-                                d = d.min(TAU - d);
-                            }
-                            let d = w * d;
+                        for (((&x, &y), &w), &period) in
+                            self.wrapped.iter().zip(p).zip(&tree.weights).zip(&tree.periods)
+                        {
+                            let d = (x - y).abs();
+                            let d = w * d.min(period - d);
                             d2 += d * d;
                         }
                     }
