@@ -360,30 +360,17 @@ impl Roadmap {
             to_goal,
             ..
         } = self;
-        scratch.begin(adjacency.len());
         to_goal.clear();
         to_goal.resize(adjacency.len(), f64::INFINITY);
-        for &g in goals {
-            scratch.improve(g, 0.0, u32::MAX);
-            scratch.open.push(Reverse((Key(0.0), g)));
-        }
-        while let Some(Reverse((_, v))) = scratch.open.pop() {
-            if !scratch.close(v) {
-                continue;
-            }
-            let cv = scratch.cost(v);
-            to_goal[v as usize] = cv;
-            for &(u, d) in &adjacency[v as usize] {
-                if scratch.is_closed(u) {
-                    continue;
-                }
-                let c = cv + d;
-                if c < scratch.cost(u) {
-                    scratch.improve(u, c, v);
-                    scratch.open.push(Reverse((Key(c), u)));
-                }
-            }
-        }
+        scratch.best_first(
+            adjacency,
+            goals,
+            |_, c| Some(c),
+            |v, c| {
+                to_goal[v as usize] = c;
+                false
+            },
+        );
         self.to_goal_of = Some((self.edges_added, goals.to_vec()));
     }
 
@@ -406,36 +393,19 @@ impl Roadmap {
         if h(start).is_infinite() {
             return None;
         }
-        scratch.begin(adjacency.len());
-        scratch.improve(start, 0.0, u32::MAX);
-        scratch.open.push(Reverse((Key(h(start)), start)));
-        while let Some(Reverse((_, v))) = scratch.open.pop() {
-            if !scratch.close(v) {
-                continue;
-            }
-            if goals.contains(&v) {
-                let mut path = vec![v];
-                let mut u = v;
-                while scratch.parent[u as usize] != u32::MAX {
-                    u = scratch.parent[u as usize];
-                    path.push(u);
-                }
-                path.reverse();
-                return Some(path);
-            }
-            let cv = scratch.cost(v);
-            for &(u, d) in &adjacency[v as usize] {
-                if scratch.is_closed(u) || h(u).is_infinite() {
-                    continue;
-                }
-                let c = cv + d;
-                if c < scratch.cost(u) {
-                    scratch.improve(u, c, v);
-                    scratch.open.push(Reverse((Key(c + weight * h(u)), u)));
-                }
-            }
+        let priority = |u: u32, c: f64| {
+            let hu = h(u);
+            hu.is_finite().then(|| c + weight * hu)
+        };
+        let reached = scratch.best_first(adjacency, &[start], priority, |v, _| goals.contains(&v))?;
+        let mut path = vec![reached];
+        let mut u = reached;
+        while scratch.parent[u as usize] != u32::MAX {
+            u = scratch.parent[u as usize];
+            path.push(u);
         }
-        None
+        path.reverse();
+        Some(path)
     }
 }
 
@@ -455,6 +425,47 @@ struct SearchScratch {
 }
 
 impl SearchScratch {
+    /// Best-first search over `adjacency` (neighbours and edge lengths) from `sources` at
+    /// cost 0: each vertex reached at cost `c` is queued at `priority(vertex, c)`, or skipped
+    /// when that is `None`; vertices are closed in priority order, each handed to `closed`
+    /// with its cost, until `closed` answers true (that vertex is returned) or none is left.
+    /// Dijkstra with `priority` = the cost, A* with the cost plus a heuristic.
+    fn best_first(
+        &mut self,
+        adjacency: &[Vec<(u32, f64)>],
+        sources: &[u32],
+        priority: impl Fn(u32, f64) -> Option<f64>,
+        mut closed: impl FnMut(u32, f64) -> bool,
+    ) -> Option<u32> {
+        self.begin(adjacency.len());
+        for &v in sources {
+            self.improve(v, 0.0, u32::MAX);
+            self.open.push(Reverse((Key(0.0), v)));
+        }
+        while let Some(Reverse((_, v))) = self.open.pop() {
+            if !self.close(v) {
+                continue;
+            }
+            let cv = self.cost(v);
+            if closed(v, cv) {
+                return Some(v);
+            }
+            for &(u, d) in &adjacency[v as usize] {
+                if self.is_closed(u) {
+                    continue;
+                }
+                let c = cv + d;
+                if c < self.cost(u)
+                    && let Some(key) = priority(u, c)
+                {
+                    self.improve(u, c, v);
+                    self.open.push(Reverse((Key(key), u)));
+                }
+            }
+        }
+        None
+    }
+
     /// Starts a search over `n` vertices.
     fn begin(&mut self, n: usize) {
         self.search = self.search.wrapping_add(1);
