@@ -395,7 +395,7 @@ impl Roadmap {
         }
         let priority = |u: u32, c: f64| {
             let hu = h(u);
-            hu.is_finite().then(|| c + weight * hu)
+            hu.is_finite().then_some(c + weight * hu)
         };
         let reached = scratch.best_first(adjacency, &[start], priority, |v, _| goals.contains(&v))?;
         let mut path = vec![reached];
