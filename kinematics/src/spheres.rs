@@ -201,13 +201,27 @@ fn cluster(pts: &[(Point3<f64>, f64)], k: usize) -> Vec<Sphere> {
             .max_by(|a, b| a.1.total_cmp(b.1))
             .map_or(0, |(i, _)| i);
     }
+    let cols = Columns::new(pts);
     let mut owner = vec![0usize; pts.len()];
+    let mut best = vec![0.0; pts.len()];
     for _ in 0..ITERATIONS {
-        assign(pts, &centers, &mut owner);
+        assign(&cols, &centers, &mut owner, &mut best);
         let mut sum = vec![(nalgebra::Vector3::zeros(), 0usize); centers.len()];
+        // The running sum of the current owner stays in registers while the owner repeats
+        // (neighbouring grid points mostly share one): the same additions in the same order.
+        let mut at = owner.first().copied().unwrap_or(0);
+        let mut run = (nalgebra::Vector3::zeros(), 0usize);
         for ((p, _), &o) in pts.iter().zip(&owner) {
-            sum[o].0 += p.coords;
-            sum[o].1 += 1;
+            if o != at {
+                sum[at] = run;
+                at = o;
+                run = sum[o];
+            }
+            run.0 += p.coords;
+            run.1 += 1;
+        }
+        if !owner.is_empty() {
+            sum[at] = run;
         }
         for (c, (s, n)) in centers.iter_mut().zip(sum) {
             if n > 0 {
@@ -215,7 +229,7 @@ fn cluster(pts: &[(Point3<f64>, f64)], k: usize) -> Vec<Sphere> {
             }
         }
     }
-    assign(pts, &centers, &mut owner);
+    assign(&cols, &centers, &mut owner, &mut best);
     let mut radius = vec![f64::NEG_INFINITY; centers.len()];
     for ((p, h), &o) in pts.iter().zip(&owner) {
         radius[o] = radius[o].max((p - centers[o]).norm() + h);
@@ -235,16 +249,36 @@ fn far_from(pts: &[(Point3<f64>, f64)], c: &Point3<f64>) -> usize {
         .map_or(0, |(i, _)| i)
 }
 
-/// Each point to the centre that needs the smallest ball to hold it.
-fn assign(pts: &[(Point3<f64>, f64)], centers: &[Point3<f64>], owner: &mut [usize]) {
-    for ((p, _), o) in pts.iter().zip(owner.iter_mut()) {
-        let mut best = f64::INFINITY;
-        for (i, c) in centers.iter().enumerate() {
-            let d = (p - c).norm_squared();
-            if d < best {
-                best = d;
-                *o = i;
-            }
+/// Points as separate coordinate arrays, so that [`assign`] runs several points per
+/// instruction.
+struct Columns {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+}
+
+impl Columns {
+    fn new(pts: &[(Point3<f64>, f64)]) -> Self {
+        Self {
+            x: pts.iter().map(|p| p.0.x).collect(),
+            y: pts.iter().map(|p| p.0.y).collect(),
+            z: pts.iter().map(|p| p.0.z).collect(),
+        }
+    }
+}
+
+/// Each point to the centre that needs the smallest ball to hold it (the first such centre
+/// on ties). `best` is scratch space of one value per point.
+fn assign(cols: &Columns, centers: &[Point3<f64>], owner: &mut [usize], best: &mut [f64]) {
+    best.fill(f64::INFINITY);
+    for (i, c) in centers.iter().enumerate() {
+        let rows = cols.x.iter().zip(&cols.y).zip(&cols.z);
+        for (((&x, &y), &z), (b, o)) in rows.zip(best.iter_mut().zip(owner.iter_mut())) {
+            let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
+            let d = dx * dx + dy * dy + dz * dz;
+            let nearer = d < *b;
+            *b = if nearer { d } else { *b };
+            *o = if nearer { i } else { *o };
         }
     }
 }
