@@ -165,6 +165,9 @@ pub struct RobotValidity {
 /// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
 /// first on the whole robot's poses).
 const PARTIAL_FK_STREAK: u32 = 3;
+/// Parts meeting a link's touching cover balls from which their bounding balls are asked
+/// about in one batch before the exact tests ([`RobotValidity::touched_parts_hit`]).
+const PART_BATCH_MIN: u32 = 2;
 
 /// Absolute slack (m) added to every bounding radius so that f32/f64 rounding and parry's
 /// tolerances can never make the broad phase prune a pair that the exact test reports.
@@ -603,6 +606,13 @@ impl RobotValidity {
 
     /// The first obstacle that part `k` of link `l` touches. Every exact link test goes
     /// through here, so all of them compose part poses the same way and agree to the last bit.
+    ///
+    /// A contact from parry's exact test counts only if the part's bounding ball touches an
+    /// obstacle too: parry's GJK intersection test (0.31) can report contact between a box and
+    /// a cylinder that are millimetres apart (its distance query gives the gap), and a part
+    /// whose bounding ball is clear is clear. Asking only on contacts keeps the ball query off
+    /// the clear tests; it also makes the answer the same whether or not a batch of the parts'
+    /// balls was asked first ([`RobotValidity::touched_parts_hit`]).
     #[inline]
     fn part_hits(&self, l: usize, k: usize) -> Option<ObstacleId> {
         let (shape, at) = &self.broad.part_shape[k];
@@ -614,8 +624,14 @@ impl RobotValidity {
                 return Some(id);
             }
         }
+        let hit = self
+            .obstacles
+            .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))?;
+        let (c, r) = self.broad.parts[k];
+        let c = self.poses[l] * c;
         self.obstacles
-            .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))
+            .ball_hits(Vector::new(c.x as f32, c.y as f32, c.z as f32), r as f32)
+            .then_some(hit)
     }
 
     /// World centres of the links' bounding spheres for the current poses.
@@ -664,12 +680,56 @@ impl RobotValidity {
             }
             touched
         };
-        let Some((k, _)) = self.parts_hit(l, balls) else {
+        let Some(k) = self.touched_parts_hit(l, balls) else {
             return false;
         };
         self.broad.hint_part = k;
         self.broad.hint_streak = 1;
         true
+    }
+
+    /// [`RobotValidity::parts_hit`] with the parts' bounding balls asked in one batch: when
+    /// several parts meet the touching cover balls, their bounding balls go to the obstacles
+    /// together (a ball gets the same answer alone and in a batch), and only the parts whose
+    /// ball touches go on to [`RobotValidity::part_hits`]. The same part answers, as the
+    /// order is kept; in the Panda's cage the bounding ball settles about four in five of
+    /// these part tests.
+    fn touched_parts_hit(&mut self, l: usize, balls: u64) -> Option<usize> {
+        let range = self.broad.part_range[l].clone();
+        let mut candidates = 0u64;
+        if range.len() <= BallBatch::CAPACITY {
+            for (bit, k) in range.clone().enumerate() {
+                if self.broad.part_cover[k] & balls != 0 {
+                    candidates |= 1 << bit;
+                }
+            }
+        }
+        if candidates.count_ones() < PART_BATCH_MIN {
+            return self.parts_hit(l, balls).map(|(k, _)| k);
+        }
+        self.part_centers(l);
+        let b = &mut self.broad;
+        b.batch.clear();
+        let mut slots = [0u8; BallBatch::CAPACITY];
+        let mut rest = candidates;
+        while rest != 0 {
+            let bit = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let k = range.start + bit;
+            let c = b.parts_world[k];
+            slots[b.batch.len()] = bit as u8;
+            b.batch
+                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.parts[k].1 as f32);
+        }
+        let mut touched = self.obstacles.balls_touching(&self.broad.batch);
+        while touched != 0 {
+            let k = range.start + slots[touched.trailing_zeros() as usize] as usize;
+            touched &= touched - 1;
+            if self.part_hits(l, k).is_some() {
+                return Some(k);
+            }
+        }
+        None
     }
 
     /// World centres of link `l`'s part spheres, computed once per check.
