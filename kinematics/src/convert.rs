@@ -1,6 +1,6 @@
 //! The one seam between this crate's nalgebra `f64` poses and parry/rapier's glam `f32` poses.
 
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
 use parry3d::math::{Pose, Rotation, Vector};
 
 /// Converts a kinematics pose to a parry/rapier pose (f64 → f32).
@@ -20,6 +20,19 @@ pub fn to_pose(iso: &Isometry3<f64>) -> Pose {
         Vector::new(t.x as f32, t.y as f32, t.z as f32),
         Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32),
     )
+}
+
+/// Converts a kinematics point to a parry/rapier vector (f64 → f32).
+///
+/// ```
+/// use hearth_kinematics::to_vector;
+/// use nalgebra::Point3;
+/// let v = to_vector(&Point3::new(1.0, 2.0, 3.0));
+/// assert_eq!((v.x, v.y, v.z), (1.0, 2.0, 3.0));
+/// ```
+#[inline]
+pub fn to_vector(p: &Point3<f64>) -> Vector {
+    Vector::new(p.x as f32, p.y as f32, p.z as f32)
 }
 
 /// Converts a parry/rapier pose to a kinematics pose (f32 → f64).

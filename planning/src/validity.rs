@@ -2,7 +2,9 @@
 
 use std::sync::Arc;
 
-use hearth_kinematics::{Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, links_touch, to_pose};
+use hearth_kinematics::{
+    Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, links_touch, to_pose, to_vector,
+};
 use nalgebra::{Isometry3, Point3};
 use parry3d::math::Vector;
 use parry3d::shape::{Ball, SharedShape};
@@ -619,7 +621,7 @@ impl RobotValidity {
         let (c, r) = self.broad.part_inner[k];
         if r > 0.0 {
             let w = self.poses[l] * c;
-            let at_w = parry3d::math::Pose::from_translation(Vector::new(w.x as f32, w.y as f32, w.z as f32));
+            let at_w = parry3d::math::Pose::from_translation(to_vector(&w));
             if let Some(id) = self.obstacles.first_hit(&Ball::new(r as f32), &at_w) {
                 return Some(id);
             }
@@ -629,9 +631,7 @@ impl RobotValidity {
             .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))?;
         let (c, r) = self.broad.parts[k];
         let c = self.poses[l] * c;
-        self.obstacles
-            .ball_hits(Vector::new(c.x as f32, c.y as f32, c.z as f32), r as f32)
-            .then_some(hit)
+        self.obstacles.ball_hits(to_vector(&c), r as f32).then_some(hit)
     }
 
     /// World centres of the links' bounding spheres for the current poses.
@@ -649,7 +649,7 @@ impl RobotValidity {
         let l = self.geometric[i];
         let c = &self.broad.world_center[l];
         if self.broad.radius[l].is_finite() {
-            let center = Vector::new(c.x as f32, c.y as f32, c.z as f32);
+            let center = to_vector(c);
             if !self.obstacles.ball_hits(center, self.broad.balls[i].radius) {
                 return false;
             }
@@ -671,8 +671,7 @@ impl RobotValidity {
             b.batch.clear();
             for k in range {
                 let c = pose * b.cover[k].0;
-                b.batch
-                    .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.cover[k].1 as f32);
+                b.batch.push(to_vector(&c), b.cover[k].1 as f32);
             }
             let touched = self.obstacles.balls_touching(&b.batch);
             if touched == 0 {
@@ -718,8 +717,7 @@ impl RobotValidity {
             let k = range.start + bit;
             let c = b.parts_world[k];
             slots[b.batch.len()] = bit as u8;
-            b.batch
-                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.parts[k].1 as f32);
+            b.batch.push(to_vector(&c), b.parts[k].1 as f32);
         }
         let mut touched = self.obstacles.balls_touching(&self.broad.batch);
         while touched != 0 {
@@ -854,8 +852,7 @@ impl RobotValidity {
         for &i in b.moving.iter().take(BallBatch::CAPACITY) {
             let l = self.geometric[i];
             let c = b.world_center[l];
-            b.batch
-                .push(Vector::new(c.x as f32, c.y as f32, c.z as f32), b.balls[i].radius);
+            b.batch.push(to_vector(&c), b.balls[i].radius);
         }
         let mut near = self.obstacles.balls_touching(&self.broad.batch);
         while near != 0 {
@@ -1069,7 +1066,7 @@ mod tests {
             let (s, c) = (golden * i as f64).sin_cos();
             let ring = (1.0 - z * z).sqrt();
             let p = centre + nalgebra::Vector3::new(ring * c, ring * s, z) * radius;
-            Vector::new(p.x as f32, p.y as f32, p.z as f32)
+            to_vector(&p)
         })
     }
 

@@ -354,14 +354,14 @@ fn states_whose_parts_are_millimetres_clear_are_valid_where_gjk_reports_contact(
         // Ground truth from parry's distance query, part by part.
         let mut gap = f32::INFINITY;
         let mut gjk_contact = false;
-        for l in 0..model.links().len() {
+        for (l, link_pose) in poses.iter().enumerate() {
             let Some(s) = model.link_shape(l) else { continue };
             let parts: Vec<(Pose, &dyn parry3d::shape::Shape)> = match s.shape.as_compound() {
                 Some(c) => c.shapes().iter().map(|(p, sh)| (*p, sh.as_ref())).collect(),
                 None => vec![(Pose::IDENTITY, s.shape.as_ref())],
             };
             for (at, part) in parts {
-                let pose = to_pose(&(poses[l] * s.origin)) * at;
+                let pose = to_pose(&(link_pose * s.origin)) * at;
                 gap = gap.min(query::distance(&pose, part, &can.pose, &*can.shape).unwrap().distance);
                 gjk_contact |= query::intersection_test(&pose, part, &can.pose, &*can.shape)
                     .unwrap()
