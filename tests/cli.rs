@@ -444,12 +444,39 @@ fn bench_plan_writes_results_json() {
         .map(|r| r["id"].clone())
         .collect();
     assert_eq!(ids, vec![serde_json::json!(41)]);
+    // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
+    for (extra, says) in [
+        (&[][..], "RRT step 6 rad, goal zone 0.5"),
+        (&["--range", "2", "--goal-zone", "0"][..], "RRT step 2 rad, goal zone 0"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+            .args([
+                "bench",
+                "plan",
+                "--problems",
+                data,
+                "--planner",
+                "rrt",
+                "--only",
+                "table_pick:1",
+            ])
+            .args(["--warm-up", "0", "--shortcut", "none"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && err.contains(says), "{extra:?}: {err}");
+    }
     for (extra, says) in [
         (&["--only", "table_pick:7"][..], "no such problem"),
         (&["--only", "bookshelf"][..], "no such problem"),
         (&["--only", "table_pick:x"][..], "not a problem id"),
         (&["--dynamic-domain", "0"][..], "--dynamic-domain must be positive"),
         (&["--dynamic-domain", "2", "--planner", "rrt"][..], "birrt only"),
+        (
+            &["--goal-zone", "0.99", "--planner", "rrt"][..],
+            "--goal-zone must be in [0, 0.95]",
+        ),
         (
             &["--no-escape", "--planner", "lazyprm"][..],
             "--no-escape applies to --planner birrt only",
