@@ -83,6 +83,17 @@ pub struct Attached {
     pub shape: SharedShape,
 }
 
+/// The moving links whose poses a check reads: links with collision geometry or an attached
+/// object, and their ancestors. Frames with neither below them (the Fetch's six head-camera
+/// frames, the Panda's tool point) are left out of the per-check kinematics.
+fn checked_moving_fk(model: &RobotModel, moves: &[bool], attached: &[Attached]) -> FkSubset {
+    let anchors: Vec<usize> = (0..model.links().len())
+        .filter(|&l| model.link_shape(l).is_some())
+        .chain(attached.iter().map(|a| a.link).filter(|&l| l < model.links().len()))
+        .collect();
+    model.fk_subset(|l| moves[l] && anchors.iter().any(|&g| g == l || model.is_ancestor(l, g)))
+}
+
 /// Which links move when the chain's joints move: those below a chain joint, or below a joint
 /// that mimics one.
 fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
@@ -146,8 +157,9 @@ pub struct RobotValidity {
     /// Whether the links and pairs that never move with the chain are clear, once known for
     /// the current reference, base and obstacles.
     fixed_clear: Option<bool>,
-    /// The links that move with the chain: after one full pass for the current reference and
-    /// base, forward kinematics recomputes only these.
+    /// The links that move with the chain and that a check reads (`checked_moving_fk`): after
+    /// one full pass for the current reference and base, forward kinematics recomputes only
+    /// these.
     moving_fk: FkSubset,
     /// Whether `poses` of the links that do not move are current.
     fixed_poses_current: bool,
@@ -415,7 +427,7 @@ impl RobotValidity {
             .collect();
         let pairs = matrix.checked_geometric_pairs(&model);
         let moves = moving_links(&model, &chain);
-        let moving_fk = model.fk_subset(|l| moves[l]);
+        let moving_fk = checked_moving_fk(&model, &moves, &[]);
         let ancestry_fk = geometric
             .iter()
             .map(|&g| model.fk_subset(|l| moves[l] && (l == g || model.is_ancestor(l, g))))
@@ -488,7 +500,14 @@ impl RobotValidity {
     /// Attaches an object (a held object moves with the gripper). It is checked against the
     /// obstacles and against every link except `link` and links adjacent to it.
     pub fn attach(&mut self, object: Attached) {
+        let link = object.link;
         self.attached.push(object);
+        if !self.moving_fk.contains(link) {
+            // A frame without geometry may now hold an object: follow it, from a full pass.
+            let moves = moving_links(&self.model, &self.chain);
+            self.moving_fk = checked_moving_fk(&self.model, &moves, &self.attached);
+            self.fixed_poses_current = false;
+        }
     }
 
     /// Removes every attached object.

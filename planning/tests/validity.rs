@@ -109,6 +109,41 @@ fn attached_object_moves_with_the_hand() {
 }
 
 #[test]
+fn an_object_held_at_a_frame_without_geometry_follows_every_state() {
+    // The tool point has no collision shape, so the check's kinematics leave it out until an
+    // object hangs from it; from then on it must follow every state, one by one and in lanes.
+    let m = RobotModel::builtin("panda").unwrap();
+    let tcp_link = m.link_index("panda_hand_tcp").unwrap();
+    assert!(m.link_shape(tcp_link).is_none());
+    let mut q_full = m.neutral_configuration();
+    q_full[..7].copy_from_slice(&FOLDED);
+    let tcp = m.link_pose(&q_full, tcp_link).unwrap();
+    let shelf = Obstacle::cuboid(
+        "shelf",
+        Pose::translation(tcp.translation.x as f32, 0.0, tcp.translation.z as f32 - 0.12),
+        Vector::new(0.05, 0.05, 0.005),
+    );
+    let mut raised = FOLDED;
+    raised[1] -= 0.5;
+    let mut v = panda(vec![shelf]);
+    // Bare: both clear; the last full pass saw the tool point at FOLDED.
+    assert!(v.is_valid(&FOLDED) && v.is_valid(&raised));
+    v.attach(Attached {
+        name: "ball".into(),
+        link: tcp_link,
+        offset: Isometry3::translation(0.0, 0.0, 0.12),
+        shape: SharedShape::ball(0.05),
+    });
+    assert!(v.is_valid(&raised), "{:?}", v.explain(&raised));
+    assert!(!v.is_valid(&FOLDED));
+    assert!(v.is_valid(&raised), "{:?}", v.explain(&raised));
+    let states: Vec<f64> = [raised, raised, FOLDED, raised].concat();
+    assert_eq!(v.first_invalid(&states, 7), Some(2));
+    let states: Vec<f64> = [raised; 4].concat();
+    assert_eq!(v.first_invalid(&states, 7), None);
+}
+
+#[test]
 fn motion_validator_finds_the_wall_between_two_free_states() {
     let wall = Obstacle::cuboid("wall", Pose::translation(0.0, 0.45, 0.5), Vector::new(0.3, 0.02, 0.3));
     let mut v = panda(vec![wall]);
