@@ -398,21 +398,21 @@ fn bench_plan_writes_results_json() {
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("plan.json");
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/panda_table_pick.json");
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-        .args([
-            "bench",
-            "plan",
-            "--problems",
-            data,
-            "--planner",
-            "birrt",
-            "--time-limit",
-            "2",
-            "--json",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let bench_plan = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+            .args(["bench", "plan", "--problems", data])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let status = bench_plan(&[
+        "--planner",
+        "birrt",
+        "--time-limit",
+        "2",
+        "--json",
+        out.to_str().unwrap(),
+    ]);
     assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let results = v["results"].as_array().unwrap();
@@ -430,11 +430,7 @@ fn bench_plan_writes_results_json() {
     );
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let only = dir.join("only.json");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-        .args(["bench", "plan", "--problems", data, "--only", "table_pick:41", "--json"])
-        .arg(&only)
-        .output()
-        .unwrap();
+    let o = bench_plan(&["--only", "table_pick:41", "--json", only.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&only).unwrap()).unwrap();
     let ids: Vec<_> = v["results"]
@@ -449,21 +445,17 @@ fn bench_plan_writes_results_json() {
         (&[][..], "RRT step 6 rad, goal zone 0.5"),
         (&["--range", "2", "--goal-zone", "0"][..], "RRT step 2 rad, goal zone 0"),
     ] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-            .args([
-                "bench",
-                "plan",
-                "--problems",
-                data,
-                "--planner",
-                "rrt",
-                "--only",
-                "table_pick:1",
-            ])
-            .args(["--warm-up", "0", "--shortcut", "none"])
-            .args(extra)
-            .output()
-            .unwrap();
+        let common = [
+            "--planner",
+            "rrt",
+            "--only",
+            "table_pick:1",
+            "--warm-up",
+            "0",
+            "--shortcut",
+            "none",
+        ];
+        let o = bench_plan(&[&common[..], extra].concat());
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && err.contains(says), "{extra:?}: {err}");
     }
@@ -482,11 +474,7 @@ fn bench_plan_writes_results_json() {
             "--no-escape applies to --planner birrt only",
         ),
     ] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-            .args(["bench", "plan", "--problems", data])
-            .args(extra)
-            .output()
-            .unwrap();
+        let o = bench_plan(extra);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
             !o.status.success() && err.contains(says) && !err.contains("panicked"),
