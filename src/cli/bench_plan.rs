@@ -140,15 +140,20 @@ fn birrt_step(robot: &str) -> Option<f64> {
     }
 }
 
-/// RRT's step and goal zone for a robot when `--range` and `--goal-zone` are not given,
-/// measured on MotionBenchMaker (`docs/benchmarks.md`): a step bounded only by the edge
-/// check (6 rad) and half the samples drawn near a goal solve more problems on both robots than
-/// the planner's defaults (OMPL's step of 0.2 × the extent, a goal zone of 0.1). Other robots
-/// take the planner's defaults.
-fn rrt_settings(robot: &str) -> (Option<f64>, f64) {
-    match robot {
+/// RRT for a robot: `range` and `goal_zone` where given, else this benchmark's settings,
+/// measured on MotionBenchMaker (`docs/benchmarks.md`): for the Panda and the Fetch a step
+/// bounded only by the edge check (6 rad) and half the samples drawn near a goal solve more
+/// problems than the planner's defaults (OMPL's step of 0.2 × the extent, a goal zone of 0.1),
+/// which other robots take.
+fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
+    let (default_range, default_zone) = match robot {
         "fetch" | "panda" => (Some(6.0), 0.5),
         _ => (None, Rrt::default().goal_zone),
+    };
+    Rrt {
+        range: range.or(default_range),
+        goal_zone: goal_zone.unwrap_or(default_zone),
+        ..Rrt::default()
     }
 }
 
@@ -280,13 +285,12 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         if !setups.contains_key(&set.robot) {
             let s = setup(&set.robot, &set.joint_names, joints.as_deref())
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
-            let step = match (a.planner, a.range, birrt_step(&set.robot), rrt_settings(&set.robot)) {
-                (PlannerKind::Birrt, None, Some(r), _) => format!("; BiRRT step {r} rad (this robot's default)"),
-                (PlannerKind::Rrt, range, _, (default_range, default_zone)) => {
-                    let range = range
-                        .or(default_range)
-                        .map_or("the planner's default".into(), |r| format!("{r} rad"));
-                    format!("; RRT step {range}, goal zone {}", a.goal_zone.unwrap_or(default_zone))
+            let step = match (a.planner, a.range, birrt_step(&set.robot)) {
+                (PlannerKind::Birrt, None, Some(r)) => format!("; BiRRT step {r} rad (this robot's default)"),
+                (PlannerKind::Rrt, _, _) => {
+                    let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
+                    let range = rrt.range.map_or("the planner's default".into(), |r| format!("{r} rad"));
+                    format!("; RRT step {range}, goal zone {}", rrt.goal_zone)
                 }
                 _ => String::new(),
             };
@@ -335,13 +339,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let before = v.checks();
                 let outcome = match a.planner {
                     PlannerKind::Rrt => {
-                        let (range, goal_zone) = rrt_settings(&set.robot);
-                        Rrt {
-                            range: a.range.or(range),
-                            goal_zone: a.goal_zone.unwrap_or(goal_zone),
-                            ..Rrt::default()
-                        }
-                        .plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                        rrt_for(&set.robot, a.range, a.goal_zone).plan(&mut motion, &mut v, &request, &budget, &mut rng)
                     }
                     PlannerKind::Birrt => {
                         let dynamic_domain = a.dynamic_domain.map(|radius| DynamicDomain {
