@@ -37,7 +37,7 @@ use crate::birrt::BiRrt;
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
-use crate::space::Space;
+use crate::space::{Space, steer};
 use crate::trajectory::{Limits, Trajectory, TrajectoryError};
 use crate::validity::StateValidator;
 
@@ -47,6 +47,13 @@ const ROUND: usize = 10;
 /// Edges re-planned around a missed graze (see [`smooth`]) before a fallback motion that still
 /// fails the verification check is given up.
 const VERIFY_ROUNDS: usize = 8;
+
+/// Sideways moves [`bypass`] tries before an edge is re-planned.
+const BYPASS_TRIES: usize = 64;
+
+/// The shortest and the longest of those moves (joint-space distance from the grazed state);
+/// the tries grow geometrically from one to the other.
+const BYPASS_REACH: [f64; 2] = [0.005, 0.2];
 
 /// How long to shortcut and how carefully.
 #[derive(Clone, Debug, PartialEq)]
@@ -307,15 +314,70 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
             out.push(w[1].clone());
             continue;
         }
+        repaired += 1;
+        if let Some(graze) = first_collision(space, validator, &w[0], &w[1], fine_resolution)
+            && let Some(via) = bypass(space, &mut fine, validator, [&w[0], &w[1]], &graze, rng)
+        {
+            out.push(via);
+            out.push(w[1].clone());
+            continue;
+        }
         let left = budget.saturating_sub(clock.start.elapsed()).as_secs_f64().max(1e-3);
         let request = PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone()));
         let range = (space.distance(&w[0], &w[1]) / 4.0).clamp(10.0 * fine_resolution, 0.25);
         let mut planner = BiRrt::with_range(Some(range));
         let solution = planner.plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
         out.extend(solution.path.states.into_iter().skip(1));
-        repaired += 1;
     }
     Ok((Path { states: out }, repaired))
+}
+
+/// The first state on the straight motion `a → b`, sampled at `resolution`, that `validator`
+/// rejects (`a` and `b` excluded).
+fn first_collision<S: Space, V: StateValidator + ?Sized>(
+    space: &S,
+    validator: &mut V,
+    a: &[f64],
+    b: &[f64],
+    resolution: f64,
+) -> Option<Vec<f64>> {
+    let n = (space.distance(a, b) / resolution).ceil().max(1.0) as usize;
+    let mut q = vec![0.0; space.dim()];
+    (1..n).find_map(|k| {
+        space.interpolate(a, b, k as f64 / n as f64, &mut q);
+        (!validator.is_valid(&q)).then(|| q.clone())
+    })
+}
+
+/// A state `via` near `graze` (a colliding state on the straight motion between `ends`) such
+/// that `ends[0] → via → ends[1]` passes `fine`: states a step of growing length from `graze`
+/// towards random samples, [`BYPASS_TRIES`] of them from [`BYPASS_REACH`]`[0]` to `[1]`. A
+/// thin graze usually clears with a small sideways move, which is much cheaper than
+/// re-planning the edge, and keeps the path where it was; a re-plan also struggles where an
+/// end sits in a pocket (a grasp between shelf boards).
+fn bypass<S: Space, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    space: &S,
+    fine: &mut MotionValidator<S>,
+    validator: &mut V,
+    ends: [&[f64]; 2],
+    graze: &[f64],
+    rng: &mut R,
+) -> Option<Vec<f64>> {
+    let (mut sample, mut via) = (vec![0.0; space.dim()], vec![0.0; space.dim()]);
+    let growth = (BYPASS_REACH[1] / BYPASS_REACH[0]).powf(1.0 / (BYPASS_TRIES - 1) as f64);
+    let mut reach = BYPASS_REACH[0];
+    for _ in 0..BYPASS_TRIES {
+        space.sample(rng, &mut sample);
+        steer(space, graze, &sample, reach, &mut via);
+        reach *= growth;
+        if validator.is_valid(&via)
+            && fine.check_motion(validator, ends[0], &via)
+            && fine.check_motion(validator, &via, ends[1])
+        {
+            return Some(via);
+        }
+    }
+    None
 }
 
 /// Which shortcutting [`smooth`] applies.
@@ -545,14 +607,19 @@ fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         keep: [&states[from], &states[to]],
         inside: end_gaps.map(|g| g <= radius),
     };
-    let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
-    let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);
     let mut fine = MotionValidator::new(space.clone(), 0.5 * resolution);
-    let budget = Budget::time(budget.as_secs_f64().max(1e-3));
-    let solution = BiRrt::plain(Some(range)).plan(&mut fine, &mut avoiding, &request, &budget, rng)?;
-    let mut out = states[..from].to_vec();
-    out.extend(solution.path.states);
-    out.extend(states[to + 1..].iter().cloned());
+    let mut out = states[..=from].to_vec();
+    if let Some(via) = bypass(space, &mut fine, &mut avoiding, [&states[from], &states[to]], bad, rng) {
+        out.push(via);
+    } else {
+        let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
+        let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);
+        let budget = Budget::time(budget.as_secs_f64().max(1e-3));
+        let solution = BiRrt::with_range(Some(range)).plan(&mut fine, &mut avoiding, &request, &budget, rng)?;
+        let inner = solution.path.states.len().saturating_sub(1);
+        out.extend(solution.path.states.into_iter().take(inner).skip(1));
+    }
+    out.extend(states[to..].iter().cloned());
     Ok(Path { states: out })
 }
 
