@@ -440,6 +440,23 @@ fn bench_plan_writes_results_json() {
         .map(|r| r["id"].clone())
         .collect();
     assert_eq!(ids, vec![serde_json::json!(41)]);
+    // BiRRT with the textbook connection; a solved plan reports its trees' sizes.
+    let other = dir.join("other.json");
+    let o = bench_plan(&[
+        "--only",
+        "table_pick:1",
+        "--connect",
+        "other",
+        "--json",
+        other.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&other).unwrap()).unwrap();
+    let r = &v["results"][0];
+    assert!(
+        r["success"] == true && r["tree_sizes"].as_array().is_some_and(|t| t.len() == 2),
+        "{r}"
+    );
     // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
     for (extra, says) in [
         (&[][..], "RRT step 6 rad, goal zone 0.5"),
@@ -473,6 +490,11 @@ fn bench_plan_writes_results_json() {
             &["--no-escape", "--planner", "lazyprm"][..],
             "--no-escape applies to --planner birrt only",
         ),
+        (
+            &["--connect", "other", "--planner", "rrt"][..],
+            "--connect applies to --planner birrt only",
+        ),
+        (&["--connect", "sideways"][..], "invalid value 'sideways'"),
     ] {
         let o = bench_plan(extra);
         let err = String::from_utf8_lossy(&o.stderr);

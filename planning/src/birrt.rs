@@ -11,8 +11,11 @@ use crate::validity::StateValidator;
 
 /// RRT-Connect: a tree from the start and a tree from the goals (seeded with every valid goal),
 /// grown in turns. Each iteration extends one tree a step of at most `range` towards a random
-/// sample, then greedily connects the other tree to the new state (equal steps of at most
-/// `range` until it reaches it or is blocked). Tree balancing ([`BiRrt::balance`], as in
+/// sample, then greedily joins the trees along a straight line in equal steps of at most
+/// `range` until it is reached or blocked: by default the tree that just grew goes on from
+/// its new state towards the other tree's nearest state ([`Connect::Onward`], as VAMP's
+/// RRT-Connect does); [`Connect::Other`] grows the other tree towards the new state instead
+/// (Kuffner & LaValle's and OMPL's). Tree balancing ([`BiRrt::balance`], as in
 /// VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper tree of short steps for a
 /// tree that barely grows) are on by default; dynamic-domain sampling ([`DynamicDomain`]) is
 /// available but off, because it lowered success on the MotionBenchMaker problems
@@ -65,6 +68,30 @@ pub struct BiRrt {
     /// Escape from pockets ([`Escape`]): a tree that almost never grows gets a helper tree of
     /// short steps from its roots. `None` turns it off.
     pub escape: Option<Escape>,
+    /// Which tree grows along the joining line after an extension ([`Connect`]).
+    pub connect: Connect,
+}
+
+/// Which tree [`BiRrt`] grows along the line that joins the trees after an extension.
+///
+/// ```
+/// use hearth_planning::birrt::{BiRrt, Connect};
+/// assert_eq!(BiRrt::default().connect, Connect::Onward);
+/// assert_eq!(BiRrt::plain(None).connect, Connect::Other);
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Connect {
+    /// The tree that just grew goes on from its new state towards the other tree's state
+    /// nearest to it (VAMP's RRT-Connect). A tree wedged in a pocket keeps the way it found
+    /// out and goes on along it whenever one of its rare extensions succeeds; on the
+    /// MotionBenchMaker Fetch problems this solves more of the hardest ones
+    /// (`docs/benchmarks.md`).
+    #[default]
+    Onward,
+    /// The other tree grows from its state nearest to the new state towards it (the textbook
+    /// algorithm; OMPL's `RRTConnect`).
+    Other,
 }
 
 impl Default for BiRrt {
@@ -74,13 +101,14 @@ impl Default for BiRrt {
             dynamic_domain: None,
             balance: true,
             escape: Some(Escape::default()),
+            connect: Connect::Onward,
         }
     }
 }
 
 impl BiRrt {
     /// Plain RRT-Connect with step `range`: no dynamic domain, strictly alternating trees, no
-    /// pocket escape.
+    /// pocket escape, the other tree connecting ([`Connect::Other`]).
     ///
     /// ```
     /// let plain = hearth_planning::BiRrt::plain(Some(0.3));
@@ -92,6 +120,7 @@ impl BiRrt {
             dynamic_domain: None,
             balance: false,
             escape: None,
+            connect: Connect::Other,
         }
     }
 
@@ -336,8 +365,8 @@ impl Stepper {
         ok.then(|| grown.add(&self.step, Some(near)))
     }
 
-    /// Grows `grown` from its state nearest to `target` straight towards it, in equal steps of
-    /// at most `range`, each added to the tree. Returns the index of `target` once reached.
+    /// Grows `grown` from its state nearest to `target` straight towards it ([`Stepper::line`]).
+    /// Returns the index of `target` once reached.
     fn connect<S: Space, V: StateValidator + ?Sized>(
         &mut self,
         motion: &mut MotionValidator<S>,
@@ -345,11 +374,25 @@ impl Stepper {
         grown: &mut Grown,
         target: &[f64],
     ) -> Option<usize> {
-        let mut at = grown
+        let at = grown
             .tree
             .nn
             .nearest(motion.space(), target)
             .expect("trees are never empty");
+        self.line(motion, validator, grown, at, target)
+    }
+
+    /// Grows `grown` from its state `at` straight towards `target`, in equal steps of at most
+    /// `range`, each added to the tree until one is blocked. Returns the index of `target` once
+    /// reached.
+    fn line<S: Space, V: StateValidator + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        grown: &mut Grown,
+        mut at: usize,
+        target: &[f64],
+    ) -> Option<usize> {
         let d = motion.space().distance(grown.tree.state(at), target);
         let n = ((d / self.range).ceil() as usize).max(1);
         self.from.copy_from_slice(grown.tree.state(at));
@@ -479,9 +522,23 @@ impl<S: Space> Planner<S> for BiRrt {
             let Some(i) = extended else {
                 continue;
             };
-            target.copy_from_slice(this.tree.state(i));
-            if let Some(j) = stepper.connect(motion, validator, other, &target) {
-                joined = Some(if grow == 0 { (i, j) } else { (j, i) });
+            let reached = match self.connect {
+                Connect::Other => {
+                    target.copy_from_slice(this.tree.state(i));
+                    stepper.connect(motion, validator, other, &target).map(|j| (i, j))
+                }
+                Connect::Onward => {
+                    let j = other
+                        .tree
+                        .nn
+                        .nearest(motion.space(), this.tree.state(i))
+                        .expect("trees are never empty");
+                    target.copy_from_slice(other.tree.state(j));
+                    stepper.line(motion, validator, this, i, &target).map(|k| (k, j))
+                }
+            };
+            if let Some((mine, theirs)) = reached {
+                joined = Some(if grow == 0 { (mine, theirs) } else { (theirs, mine) });
             }
         }
         let (si, gi) = joined.expect("loop ends when joined");

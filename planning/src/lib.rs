@@ -42,7 +42,7 @@ pub mod space;
 pub mod trajectory;
 pub mod validity;
 
-pub use birrt::{BiRrt, DynamicDomain, Escape};
+pub use birrt::{BiRrt, Connect, DynamicDomain, Escape};
 pub use error::PlanError;
 pub use lazy_prm::{LazyPrm, LazyPrmSettings};
 pub use motion::MotionValidator;

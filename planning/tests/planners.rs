@@ -11,8 +11,8 @@ use hearth_planning::problem::ProblemSet;
 use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest,
-    Planner, Rrt, Solution,
+    BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError,
+    PlanRequest, Planner, Rrt, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -239,6 +239,16 @@ fn narrow_passage_birrt_plain() {
     passage("passage/birrt_plain", || BiRrt::plain(None));
 }
 
+/// The other tree grows along the joining line (OMPL's RRTConnect) instead of the one that
+/// just grew (the default, VAMP's).
+#[test]
+fn narrow_passage_birrt_connect_other() {
+    passage("passage/birrt_other", || BiRrt {
+        connect: Connect::Other,
+        ..BiRrt::default()
+    });
+}
+
 /// Dynamic-domain sampling: states wedged against the wall only accept near samples.
 #[test]
 fn narrow_passage_birrt_dynamic_domain() {
@@ -395,6 +405,14 @@ fn mbm_rrt() {
 #[test]
 fn mbm_birrt() {
     mbm("mbm/birrt", BiRrt::default);
+}
+
+#[test]
+fn mbm_birrt_connect_other() {
+    mbm("mbm/birrt_other", || BiRrt {
+        connect: Connect::Other,
+        ..BiRrt::default()
+    });
 }
 
 #[test]

@@ -15,8 +15,8 @@ use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
-    BiRrt, Budget, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene, PlanRequest,
-    Planner, RobotValidity, Rrt, StateValidator,
+    BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
+    PlanRequest, Planner, RobotValidity, Rrt, StateValidator,
 };
 use rand::SeedableRng;
 use serde_json::{Value, json};
@@ -32,6 +32,24 @@ pub enum PlannerKind {
     Birrt,
     /// Lazy PRM (the roadmap is rebuilt for every problem: each has its own obstacles).
     Lazyprm,
+}
+
+/// `--connect`: which tree BiRRT grows along the joining line ([`Connect`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ConnectArg {
+    /// The tree that just grew (VAMP's RRT-Connect).
+    Onward,
+    /// The other tree (OMPL's RRTConnect).
+    Other,
+}
+
+impl From<ConnectArg> for Connect {
+    fn from(c: ConnectArg) -> Self {
+        match c {
+            ConnectArg::Onward => Connect::Onward,
+            ConnectArg::Other => Connect::Other,
+        }
+    }
 }
 
 /// Post-processing of each path.
@@ -79,6 +97,11 @@ pub struct BenchPlanArgs {
     /// helper tree of short steps), for comparisons with plain balanced RRT-Connect.
     #[arg(long)]
     no_escape: bool,
+    /// BiRRT only: which tree grows along the line joining the trees after an extension:
+    /// `onward` (the default: the tree that just grew, as VAMP) or `other` (the other tree, as
+    /// OMPL's RRTConnect).
+    #[arg(long, value_enum)]
+    connect: Option<ConnectArg>,
     /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
     /// OMPL's RRT. When absent: 0.5 for the Panda and the Fetch, the planner's default (0.1)
     /// otherwise.
@@ -248,6 +271,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.no_escape && a.planner != PlannerKind::Birrt {
         bail!("--no-escape applies to --planner birrt only");
     }
+    if a.connect.is_some() && a.planner != PlannerKind::Birrt {
+        bail!("--connect applies to --planner birrt only");
+    }
     let mut sets: Vec<(ProblemSet, Option<PathBuf>)> = Vec::new();
     for p in &a.problems {
         if p.is_dir() {
@@ -351,6 +377,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             range: a.range.or(birrt_step(&set.robot)),
                             dynamic_domain,
                             escape: (!a.no_escape).then(Escape::default),
+                            connect: a.connect.map_or(Connect::default(), Connect::from),
                             ..BiRrt::default()
                         }
                         .plan(&mut motion, &mut v, &request, &budget, &mut rng)
@@ -377,6 +404,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         row["plan_time_s"] = json!(sol.stats.time.as_secs_f64());
                         row["plan_checks"] = json!(sol.stats.states_checked);
                         row["iterations"] = json!(sol.stats.iterations);
+                        row["tree_sizes"] = json!(sol.stats.tree_sizes);
                         let fine_resolution = a.fine_resolution.min(a.resolution / 10.0);
                         let settings = ShortcutSettings {
                             attempts: a.shortcut_attempts,
