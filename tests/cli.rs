@@ -491,7 +491,7 @@ fn bench_plan_writes_results_json() {
             "--no-escape applies to --planner birrt only",
         ),
         (
-            &["--connect", "other", "--planner", "rrt"][..],
+            &["--connect", "onward", "--planner", "rrt"][..],
             "--connect applies to --planner birrt only",
         ),
         (&["--connect", "sideways"][..], "invalid value 'sideways'"),

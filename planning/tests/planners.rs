@@ -239,12 +239,12 @@ fn narrow_passage_birrt_plain() {
     passage("passage/birrt_plain", || BiRrt::plain(None));
 }
 
-/// The other tree grows along the joining line (OMPL's RRTConnect) instead of the one that
-/// just grew (the default, VAMP's).
+/// The tree that just grew goes on along the joining line (VAMP's RRT-Connect) instead of the
+/// other tree (the default, OMPL's).
 #[test]
-fn narrow_passage_birrt_connect_other() {
-    passage("passage/birrt_other", || BiRrt {
-        connect: Connect::Other,
+fn narrow_passage_birrt_connect_onward() {
+    passage("passage/birrt_onward", || BiRrt {
+        connect: Connect::Onward,
         ..BiRrt::default()
     });
 }
@@ -287,14 +287,25 @@ fn pocket_space() -> JointSpace {
 
 #[test]
 fn pocketed_goal_birrt_escape() {
+    pocketed_goal_escape("pocket/birrt", Connect::Other);
+}
+
+#[test]
+fn pocketed_goal_birrt_escape_onward() {
+    pocketed_goal_escape("pocket/birrt_onward", Connect::Onward);
+}
+
+/// The goal in [`pocket`] is reached through the hole with the escape, and never without it.
+fn pocketed_goal_escape(label: &str, connect: Connect) {
     let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
     let with = |escape| BiRrt {
         range: Some(0.4),
         escape,
+        connect,
         ..BiRrt::default()
     };
     let s = solve(
-        "pocket/birrt",
+        label,
         || with(Some(Escape::default())),
         &pocket_space(),
         POCKET_RESOLUTION,
@@ -316,7 +327,7 @@ fn pocketed_goal_birrt_escape() {
     let mut rng = Pcg64Mcg::seed_from_u64(7);
     match with(None).plan(&mut motion, &mut pocket(), &request, &budget(200_000), &mut rng) {
         Err(PlanError::Timeout { stats }) => assert_eq!(stats.tree_sizes[1], 1, "{stats:?}"),
-        other => panic!("expected a timeout, got {other:?}"),
+        other => panic!("{label}: expected a timeout, got {other:?}"),
     }
 }
 
@@ -408,9 +419,9 @@ fn mbm_birrt() {
 }
 
 #[test]
-fn mbm_birrt_connect_other() {
-    mbm("mbm/birrt_other", || BiRrt {
-        connect: Connect::Other,
+fn mbm_birrt_connect_onward() {
+    mbm("mbm/birrt_onward", || BiRrt {
+        connect: Connect::Onward,
         ..BiRrt::default()
     });
 }

@@ -98,8 +98,9 @@ pub struct BenchPlanArgs {
     #[arg(long)]
     no_escape: bool,
     /// BiRRT only: which tree grows along the line joining the trees after an extension:
-    /// `onward` (the default: the tree that just grew, as VAMP) or `other` (the other tree, as
-    /// OMPL's RRTConnect).
+    /// `other` (the other tree, as OMPL's RRTConnect) or `onward` (the tree that just grew, as
+    /// VAMP's). When absent: `onward` for the Fetch, `other` otherwise. See
+    /// `docs/benchmarks.md`.
     #[arg(long, value_enum)]
     connect: Option<ConnectArg>,
     /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
@@ -151,15 +152,22 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
         .collect()
 }
 
-/// BiRRT's step for a robot when `--range` is not given, measured on MotionBenchMaker
-/// (`docs/benchmarks.md`): the Fetch's torso + arm problems are solved more often with 1.2 rad
-/// than with the planner's 0.26 rad default (94.0 % against 82.8 % in 1 s); the Panda's are
-/// solved fastest overall with 0.65 rad. Other robots take the planner's default.
-fn birrt_step(robot: &str) -> Option<f64> {
-    match robot {
-        "fetch" => Some(1.2),
-        "panda" => Some(0.65),
-        _ => None,
+/// BiRRT for a robot: `range` and `connect` where given, else this benchmark's settings,
+/// measured on MotionBenchMaker (`docs/benchmarks.md`): the Fetch's torso + arm problems are
+/// solved more often with a 1.2 rad step than with the planner's 0.26 rad default (94.0 %
+/// against 82.8 % in 1 s), and with the onward connection (its hardest problems 56 of 176
+/// plans against 38); the Panda's are solved fastest with 0.65 rad and the planner's own
+/// connection. Other robots take the planner's defaults.
+fn birrt_for(robot: &str, range: Option<f64>, connect: Option<Connect>) -> BiRrt {
+    let (default_range, default_connect) = match robot {
+        "fetch" => (Some(1.2), Connect::Onward),
+        "panda" => (Some(0.65), Connect::Other),
+        _ => (None, Connect::default()),
+    };
+    BiRrt {
+        range: range.or(default_range),
+        connect: connect.unwrap_or(default_connect),
+        ..BiRrt::default()
     }
 }
 
@@ -311,14 +319,24 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         if !setups.contains_key(&set.robot) {
             let s = setup(&set.robot, &set.joint_names, joints.as_deref())
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
-            let step = match (a.planner, a.range, birrt_step(&set.robot)) {
-                (PlannerKind::Birrt, None, Some(r)) => format!("; BiRRT step {r} rad (this robot's default)"),
-                (PlannerKind::Rrt, _, _) => {
+            let step = match a.planner {
+                PlannerKind::Birrt => {
+                    let birrt = birrt_for(&set.robot, a.range, a.connect.map(Connect::from));
+                    let range = birrt
+                        .range
+                        .map_or("the planner's default".into(), |r| format!("{r} rad"));
+                    let connect = match birrt.connect {
+                        Connect::Other => "other",
+                        Connect::Onward => "onward",
+                    };
+                    format!("; BiRRT step {range}, {connect} connection")
+                }
+                PlannerKind::Rrt => {
                     let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
                     let range = rrt.range.map_or("the planner's default".into(), |r| format!("{r} rad"));
                     format!("; RRT step {range}, goal zone {}", rrt.goal_zone)
                 }
-                _ => String::new(),
+                PlannerKind::Lazyprm => String::new(),
             };
             eprintln!("{}: {}{step}", set.robot, s.note);
             if a.warm_up > 0 {
@@ -374,11 +392,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             ..DynamicDomain::default()
                         });
                         BiRrt {
-                            range: a.range.or(birrt_step(&set.robot)),
                             dynamic_domain,
                             escape: (!a.no_escape).then(Escape::default),
-                            connect: a.connect.map_or(Connect::default(), Connect::from),
-                            ..BiRrt::default()
+                            ..birrt_for(&set.robot, a.range, a.connect.map(Connect::from))
                         }
                         .plan(&mut motion, &mut v, &request, &budget, &mut rng)
                     }
