@@ -48,6 +48,10 @@ const ROUND: usize = 10;
 /// fails the verification check is given up.
 const VERIFY_ROUNDS: usize = 8;
 
+/// Fresh parabolic shortcutting runs after one whose motion fails the verification check,
+/// before [`smooth`] falls back to the unshortcut motion.
+const PARABOLIC_RETRIES: usize = 2;
+
 /// Sideways moves [`bypass`] tries before an edge is re-planned.
 const BYPASS_TRIES: usize = 64;
 
@@ -420,8 +424,9 @@ pub struct Smoothed {
 /// within `limits`, and, for `Parabolic`, acceleration-bounded shortcutting whose ramps are
 /// checked at both resolutions. With `settings.verify_resolution`, the finished trajectory is
 /// checked once more at that resolution; when the shortcut one fails (a graze between the
-/// samples of the earlier checks) the rest-to-rest timing of the repaired path is returned if
-/// it passes; if it fails too, the edge holding the colliding state is re-planned around that
+/// samples of the earlier checks) the parabolic shortcutting runs afresh from the rest-to-rest
+/// timing, up to twice more, and then the rest-to-rest timing of the repaired path is returned
+/// if it passes; if it fails too, the edge holding the colliding state is re-planned around that
 /// state, a few times (within what is left of `repair_budget`), and [`PlanError::InvalidMotion`]
 /// is returned if no such motion passes.
 ///
@@ -484,13 +489,36 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let mut trajectory = rest_to_rest.clone();
     let mut current = repaired_path.clone();
     let mut out_parabolic = ShortcutStats::default();
+    // Whether `trajectory` passes the verification check (or none is asked for), once known.
+    let mut passes = None;
     if smoothing == Smoothing::Parabolic {
-        out_parabolic = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad_input)?;
+        // A shortcut motion that fails the verification (a graze between the samples of its
+        // ramp checks) is shortcut afresh from the rest-to-rest timing, with other random
+        // pairs, before the pipeline falls back to an unshortcut motion.
+        for _ in 0..=PARABOLIC_RETRIES {
+            trajectory = rest_to_rest.clone();
+            let stats = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad_input)?;
+            out_parabolic.attempts += stats.attempts;
+            out_parabolic.accepted += stats.accepted;
+            out_parabolic.time += stats.time;
+            let ok = settings
+                .verify_resolution
+                .is_none_or(|r| trajectory.check(&space, validator, r).is_ok());
+            passes = Some(ok);
+            if ok {
+                break;
+            }
+        }
         current = trajectory.to_path(&space, motion.resolution());
     }
+    let passes = passes.unwrap_or_else(|| {
+        settings
+            .verify_resolution
+            .is_none_or(|r| trajectory.check(&space, validator, r).is_ok())
+    });
     let mut fell_back = false;
     if let Some(r) = settings.verify_resolution
-        && trajectory.check(&space, validator, r).is_err()
+        && !passes
     {
         // Fall back to the unshortcut timing of the repaired path. Its edges passed at the
         // fine spacing, but a path can graze a surface so thinly that samples at one spacing
