@@ -396,7 +396,6 @@ fn bench_kin_writes_json() {
 fn bench_plan_writes_results_json() {
     let dir = std::env::temp_dir().join(format!("hearth_cli_plan_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("plan.json");
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/panda_table_pick.json");
     let bench_plan = |extra: &[&str]| {
         std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
@@ -405,16 +404,16 @@ fn bench_plan_writes_results_json() {
             .output()
             .unwrap()
     };
-    let status = bench_plan(&[
-        "--planner",
-        "birrt",
-        "--time-limit",
-        "2",
-        "--json",
-        out.to_str().unwrap(),
-    ]);
-    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    // Runs the command with `extra` and `--json` to a file named `name`: its stderr and JSON.
+    let bench_json = |extra: &[&str], name: &str| {
+        let path = dir.join(name);
+        let o = bench_plan(&[extra, &["--json", path.to_str().unwrap()][..]].concat());
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{extra:?}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        (err, v)
+    };
+    let (_, v) = bench_json(&["--planner", "birrt", "--time-limit", "2"], "plan.json");
     let results = v["results"].as_array().unwrap();
     assert_eq!(results.len(), 2, "one row per problem");
     // Problem 41 is marked invalid in the set: reported as skipped, not failed.
@@ -429,10 +428,7 @@ fn bench_plan_writes_results_json() {
         v["summary"]
     );
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
-    let only = dir.join("only.json");
-    let o = bench_plan(&["--only", "table_pick:41", "--json", only.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&only).unwrap()).unwrap();
+    let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
     let ids: Vec<_> = v["results"]
         .as_array()
         .unwrap()
@@ -440,23 +436,20 @@ fn bench_plan_writes_results_json() {
         .map(|r| r["id"].clone())
         .collect();
     assert_eq!(ids, vec![serde_json::json!(41)]);
-    // BiRRT with the textbook connection; a solved plan reports its trees' sizes.
-    let other = dir.join("other.json");
-    let o = bench_plan(&[
-        "--only",
-        "table_pick:1",
-        "--connect",
-        "other",
-        "--json",
-        other.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&other).unwrap()).unwrap();
-    let r = &v["results"][0];
-    assert!(
-        r["success"] == true && r["tree_sizes"].as_array().is_some_and(|t| t.len() == 2),
-        "{r}"
-    );
+    // The Panda's BiRRT takes the planner's connection unless told otherwise; a solved plan
+    // reports its trees' sizes.
+    for (connect, says) in [
+        (&[][..], "BiRRT step 0.65 rad, other connection"),
+        (&["--connect", "onward"][..], "BiRRT step 0.65 rad, onward connection"),
+    ] {
+        let (err, v) = bench_json(&[&["--only", "table_pick:1"][..], connect].concat(), "connect.json");
+        assert!(err.contains(says), "{connect:?}: {err}");
+        let r = &v["results"][0];
+        assert!(
+            r["success"] == true && r["tree_sizes"].as_array().is_some_and(|t| t.len() == 2),
+            "{r}"
+        );
+    }
     // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
     for (extra, says) in [
         (&[][..], "RRT step 6 rad, goal zone 0.5"),

@@ -164,33 +164,33 @@ fn random_shortcutting_never_lengthens_nor_invalidates() {
     }
 }
 
-#[test]
-fn repair_replaces_edges_that_fail_finely() {
-    // A wall thinner than the coarse resolution: the straight edge passes between samples.
-    struct Thin(u64);
-    impl StateValidator for Thin {
-        fn is_valid(&mut self, q: &[f64]) -> bool {
-            self.0 += 1;
-            !((0.52..=0.522).contains(&q[0]) && q[1] < 0.9)
-        }
-        fn checks(&self) -> u64 {
-            self.0
-        }
+/// Valid where `free` says so; counts its checks.
+struct Region(fn(&[f64]) -> bool, u64);
+
+impl StateValidator for Region {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.1 += 1;
+        (self.0)(q)
     }
+    fn checks(&self) -> u64 {
+        self.1
+    }
+}
+
+/// `path`, one edge that checks 5 cm apart pass in the world `free`, repaired at 0.5 mm: the
+/// edge is repaired and every edge of the result passes at 0.5 mm.
+fn repaired_finely(free: fn(&[f64]) -> bool, path: &Path) -> Path {
     let space = square();
-    let path = Path {
-        states: vec![vec![0.1, 0.1], vec![0.9, 0.1]],
-    };
     let mut coarse = MotionValidator::new(space.clone(), 0.05);
     assert!(
-        coarse.check_motion(&mut Thin(0), &path.states[0], &path.states[1]),
+        coarse.check_motion(&mut Region(free, 0), &path.states[0], &path.states[1]),
         "the fixture needs a coarse miss"
     );
     let mut rng = Pcg64Mcg::seed_from_u64(0);
     let (fixed, repaired) = shortcut::repair(
         &space,
-        &mut Thin(0),
-        &path,
+        &mut Region(free, 0),
+        path,
         0.0005,
         std::time::Duration::from_secs(5),
         &mut rng,
@@ -202,8 +202,19 @@ fn repair_replaces_edges_that_fail_finely() {
         fixed
             .states
             .windows(2)
-            .all(|w| fine.check_motion(&mut Thin(0), &w[0], &w[1]))
+            .all(|w| fine.check_motion(&mut Region(free, 0), &w[0], &w[1]))
     );
+    fixed
+}
+
+#[test]
+fn repair_replaces_edges_that_fail_finely() {
+    // A wall thinner than the coarse resolution, open above y = 0.9: the straight edge passes
+    // between samples.
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.1]],
+    };
+    let fixed = repaired_finely(|q| !((0.52..=0.522).contains(&q[0]) && q[1] < 0.9), &path);
     assert!(fixed.states.iter().any(|q| q[1] >= 0.9));
 }
 
@@ -212,50 +223,20 @@ fn repair_replaces_edges_that_fail_finely() {
 /// its way into the pocket (a re-planned edge would have to find the corridor's mouth again).
 #[test]
 fn repair_bypasses_a_graze_with_one_sideways_waypoint() {
-    struct Pocket(u64);
-    impl StateValidator for Pocket {
-        fn is_valid(&mut self, q: &[f64]) -> bool {
-            self.0 += 1;
-            let (x, y) = (q[0], q[1]);
-            let block = (0.55..=1.0).contains(&x) && (0.4..=0.6).contains(&y);
-            let corridor = x < 0.95 && (y - 0.5).abs() < 0.01;
-            let speck = (0.311..=0.313).contains(&x) && (y - 0.5).abs() <= 0.0005;
-            (!block || corridor) && !speck
-        }
-        fn checks(&self) -> u64 {
-            self.0
-        }
-    }
-    let space = square();
+    let pocket = |q: &[f64]| {
+        let (x, y) = (q[0], q[1]);
+        let block = (0.55..=1.0).contains(&x) && (0.4..=0.6).contains(&y);
+        let corridor = x < 0.95 && (y - 0.5).abs() < 0.01;
+        let speck = (0.311..=0.313).contains(&x) && (y - 0.5).abs() <= 0.0005;
+        (!block || corridor) && !speck
+    };
     let path = Path {
         states: vec![vec![0.1, 0.5], vec![0.9, 0.5]],
     };
-    let mut coarse = MotionValidator::new(space.clone(), 0.05);
-    assert!(
-        coarse.check_motion(&mut Pocket(0), &path.states[0], &path.states[1]),
-        "the fixture needs a coarse miss"
-    );
-    let mut rng = Pcg64Mcg::seed_from_u64(0);
-    let (fixed, repaired) = shortcut::repair(
-        &space,
-        &mut Pocket(0),
-        &path,
-        0.0005,
-        std::time::Duration::from_secs(5),
-        &mut rng,
-    )
-    .unwrap();
-    assert_eq!(repaired, 1);
+    let fixed = repaired_finely(pocket, &path);
     assert_eq!(fixed.states.len(), 3, "one waypoint added: {:?}", fixed.states);
     assert_eq!((&fixed.states[0], &fixed.states[2]), (&path.states[0], &path.states[1]));
-    assert!(space.distance(&fixed.states[1], &[0.312, 0.5]) <= 0.2 + 1e-3);
-    let mut fine = MotionValidator::new(space, 0.0005);
-    assert!(
-        fixed
-            .states
-            .windows(2)
-            .all(|w| fine.check_motion(&mut Pocket(0), &w[0], &w[1]))
-    );
+    assert!(square().distance(&fixed.states[1], &[0.312, 0.5]) <= 0.2 + 1e-3);
 }
 
 /// A band 0.2 mm thick across the square at y = 0.5, left of `x_max`: sampled checks at
