@@ -15,11 +15,12 @@ use crate::validity::StateValidator;
 /// `range` until it is reached or blocked: by default the other tree grows from its nearest
 /// state towards the new one ([`Connect::Other`], Kuffner & LaValle's and OMPL's);
 /// [`Connect::Onward`] lets the tree that just grew go on towards the other tree instead (as
-/// VAMP's RRT-Connect does), which suits goals wedged in pockets. Tree balancing ([`BiRrt::balance`], as in
-/// VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper tree of short steps for a
-/// tree that barely grows) are on by default; dynamic-domain sampling ([`DynamicDomain`]) is
-/// available but off, because it lowered success on the MotionBenchMaker problems
-/// (`docs/benchmarks.md`). [`BiRrt::plain`] is the textbook algorithm.
+/// VAMP's RRT-Connect does), which suits goals wedged in pockets. Tree balancing
+/// ([`BiRrt::balance`], as in VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper
+/// tree of short steps for a tree that barely grows) are on by default; dynamic-domain
+/// sampling ([`DynamicDomain`]) is available but off, because it lowered success on the
+/// MotionBenchMaker problems (`docs/benchmarks.md`). [`BiRrt::plain`] is the textbook
+/// algorithm.
 ///
 /// One iteration is one sample. Settings are serde-derivable.
 ///
