@@ -495,8 +495,10 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         // A shortcut motion that fails the verification (a graze between the samples of its
         // ramp checks) is shortcut afresh from the rest-to-rest timing, with other random
         // pairs, before the pipeline falls back to an unshortcut motion.
-        for _ in 0..=PARABOLIC_RETRIES {
-            trajectory = rest_to_rest.clone();
+        for attempt in 0..=PARABOLIC_RETRIES {
+            if attempt > 0 {
+                trajectory = rest_to_rest.clone();
+            }
             let stats = parabolic(motion, validator, &mut trajectory, limits, settings, rng).map_err(bad_input)?;
             out_parabolic.attempts += stats.attempts;
             out_parabolic.accepted += stats.accepted;

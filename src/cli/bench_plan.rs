@@ -152,21 +152,27 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
         .collect()
 }
 
-/// BiRRT for a robot: `range` and `connect` where given, else this benchmark's settings,
-/// measured on MotionBenchMaker (`docs/benchmarks.md`): the Fetch's torso + arm problems are
-/// solved more often with a 1.2 rad step than with the planner's 0.26 rad default (94.0 %
-/// against 82.8 % in 1 s), and with the onward connection (its hardest problems 56 of 176
-/// plans against 38); the Panda's are solved fastest with 0.65 rad and the planner's own
-/// connection. Other robots take the planner's defaults.
-fn birrt_for(robot: &str, range: Option<f64>, connect: Option<Connect>) -> BiRrt {
+/// BiRRT for a robot as the command's arguments set it up. `--range` and `--connect` where
+/// given, else this benchmark's settings, measured on MotionBenchMaker (`docs/benchmarks.md`):
+/// the Fetch's torso + arm problems are solved more often with a 1.2 rad step than with the
+/// planner's 0.26 rad default (94.0 % against 82.8 % in 1 s), and with the onward connection
+/// (its hardest problems 56 of 176 plans against 38); the Panda's are solved fastest with
+/// 0.65 rad and the planner's own connection. Other robots take the planner's defaults.
+fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
     let (default_range, default_connect) = match robot {
         "fetch" => (Some(1.2), Connect::Onward),
         "panda" => (Some(0.65), Connect::Other),
         _ => (None, Connect::default()),
     };
     BiRrt {
-        range: range.or(default_range),
-        connect: connect.unwrap_or(default_connect),
+        range: a.range.or(default_range),
+        connect: a.connect.map_or(default_connect, Connect::from),
+        dynamic_domain: a.dynamic_domain.map(|radius| DynamicDomain {
+            radius,
+            min_radius: radius / 4.0,
+            ..DynamicDomain::default()
+        }),
+        escape: (!a.no_escape).then(Escape::default),
         ..BiRrt::default()
     }
 }
@@ -321,7 +327,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
             let step = match a.planner {
                 PlannerKind::Birrt => {
-                    let birrt = birrt_for(&set.robot, a.range, a.connect.map(Connect::from));
+                    let birrt = birrt_for(&set.robot, &a);
                     let range = birrt
                         .range
                         .map_or("the planner's default".into(), |r| format!("{r} rad"));
@@ -355,6 +361,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         }
         let rs = &setups[&set.robot];
         let space = JointSpace::from_chain(&rs.chain).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let (birrt, rrt) = (birrt_for(&set.robot, &a), rrt_for(&set.robot, a.range, a.goal_zone));
         for problem in &set.problems {
             for rep in 0..a.repeat {
                 done += 1;
@@ -382,22 +389,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(a.seed ^ ((problem.id as u64) << 20) ^ rep as u64);
                 let before = v.checks();
                 let outcome = match a.planner {
-                    PlannerKind::Rrt => {
-                        rrt_for(&set.robot, a.range, a.goal_zone).plan(&mut motion, &mut v, &request, &budget, &mut rng)
-                    }
-                    PlannerKind::Birrt => {
-                        let dynamic_domain = a.dynamic_domain.map(|radius| DynamicDomain {
-                            radius,
-                            min_radius: radius / 4.0,
-                            ..DynamicDomain::default()
-                        });
-                        BiRrt {
-                            dynamic_domain,
-                            escape: (!a.no_escape).then(Escape::default),
-                            ..birrt_for(&set.robot, a.range, a.connect.map(Connect::from))
-                        }
-                        .plan(&mut motion, &mut v, &request, &budget, &mut rng)
-                    }
+                    PlannerKind::Rrt => rrt.clone().plan(&mut motion, &mut v, &request, &budget, &mut rng),
+                    PlannerKind::Birrt => birrt.clone().plan(&mut motion, &mut v, &request, &budget, &mut rng),
                     PlannerKind::Lazyprm => LazyPrm::new(LazyPrmSettings {
                         range: a.range,
                         ..LazyPrmSettings::default()
