@@ -4,7 +4,8 @@
 //! Each plan uses the same seed, so every iteration plans the same path. `nn/…` times one
 //! nearest-neighbour query (and one query for the 10 nearest) among 20,000 random Panda
 //! configurations, with k-d trees (the Panda's bounded joints) and with k-d trees
-//! on the torus (the same space with its first joint made continuous).
+//! on the torus (the same space with its first joint made continuous), and one query among
+//! 1,000 states packed in a pocket (±0.3 rad) from samples of the whole space.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -19,7 +20,7 @@ use hearth_planning::trajectory::Limits;
 use hearth_planning::{
     BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity, Rrt,
 };
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 
 const RESOLUTION: f64 = 0.02;
 
@@ -142,14 +143,14 @@ fn nearest_neighbours(c: &mut Criterion) {
     continuous[0] = true;
     let torus = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
     let mut g = c.benchmark_group("nn");
-    for (name, space) in [("nearest_20k_kd", kd), ("nearest_20k_torus", torus)] {
+    for (name, space) in [("nearest_20k_kd", &kd), ("nearest_20k_torus", &torus)] {
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
         let mut nn = NearestNeighbors::new(7);
         let mut q = [0.0; 7];
         for _ in 0..20_000 {
             space.sample(&mut rng, &mut q);
             nn.insert(&q);
-            nn.nearest(&space, &q);
+            nn.nearest(space, &q);
         }
         let queries: Vec<[f64; 7]> = (0..256)
             .map(|_| {
@@ -161,13 +162,43 @@ fn nearest_neighbours(c: &mut Criterion) {
         g.bench_function(name, |b| {
             b.iter(|| {
                 i = (i + 1) % queries.len();
-                black_box(nn.nearest(&space, &queries[i]))
+                black_box(nn.nearest(space, &queries[i]))
             })
         });
         g.bench_function(name.replace("nearest", "k10"), |b| {
             b.iter(|| {
                 i = (i + 1) % queries.len();
-                black_box(nn.k_nearest(&space, &queries[i], 10))
+                black_box(nn.k_nearest(space, &queries[i], 10))
+            })
+        });
+    }
+    // A tree stuck in a pocket: 1,000 states within ±0.3 rad of one configuration, queried
+    // with samples from the whole space (every query is far from every state).
+    for (name, space) in [("nearest_1k_pocket_kd", &kd), ("nearest_1k_pocket_torus", &torus)] {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let mut centre = [0.0; 7];
+        space.sample(&mut rng, &mut centre);
+        let mut nn = NearestNeighbors::new(7);
+        let mut q = [0.0; 7];
+        for _ in 0..1_000 {
+            for (x, c) in q.iter_mut().zip(&centre) {
+                *x = c + rng.random_range(-0.3..0.3);
+            }
+            space.enforce_bounds(&mut q);
+            nn.insert(&q);
+            nn.nearest(space, &q);
+        }
+        let queries: Vec<[f64; 7]> = (0..256)
+            .map(|_| {
+                space.sample(&mut rng, &mut q);
+                q
+            })
+            .collect();
+        let mut i = 0;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                i = (i + 1) % queries.len();
+                black_box(nn.nearest(space, &queries[i]))
             })
         });
     }

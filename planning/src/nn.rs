@@ -8,7 +8,10 @@
 //! joints, the angles' differences taken the short way round) get k-d trees instead, which
 //! prune far better in 7 or 8 dimensions (a nearest-neighbour query among 20,000 Panda states
 //! takes about 5 µs with k-d trees and 38 µs with vantage-point trees; with one joint
-//! continuous, 8 µs). All give the exact answer, ties broken by id.
+//! continuous, 8 µs). The k-d trees keep each node's bounding box, which prunes queries far
+//! from every state: 1,000 states in a pocket answer a sample of the whole space in about
+//! 3 µs, against 7 µs with the cells' split planes alone. All give the exact answer, ties
+//! broken by id.
 //! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
 //! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
 //! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`
@@ -509,6 +512,11 @@ struct KdTree {
     /// Per coordinate of a tree with angles: 2π for an angle, infinity otherwise, so that the
     /// leaves' short way round, `min(d, period − d)`, needs no branch (or mask) per coordinate.
     periods: Vec<f64>,
+    /// Per node, the bounding box of its states' copies in `points`: `dim` lower corners then
+    /// `dim` upper corners. A query far from every state (a sample of the whole space against a
+    /// tree stuck in a pocket) is pruned by the boxes' distance, where the cells' split planes
+    /// alone leave most leaves to visit.
+    boxes: Vec<f64>,
 }
 
 impl KdTree {
@@ -523,6 +531,7 @@ impl KdTree {
             weights: weights.to_vec(),
             periods: wraps.iter().map(|&w| if w { TAU } else { f64::INFINITY }).collect(),
             wraps,
+            boxes: Vec::new(),
         };
         tree.build_node(states, dim, &mut ids);
         for k in 0..tree.ids.len() {
@@ -532,7 +541,68 @@ impl KdTree {
                 tree.points.push(x);
             }
         }
+        tree.build_boxes(dim);
         tree
+    }
+
+    /// Fills `boxes`: children come after their parent in `nodes`, so one backward pass sees
+    /// every child's box before its parent's.
+    fn build_boxes(&mut self, dim: usize) {
+        let mut boxes = vec![0.0; self.nodes.len() * 2 * dim];
+        for n in (0..self.nodes.len()).rev() {
+            let (done, rest) = boxes.split_at_mut((n + 1) * 2 * dim);
+            let (lo, hi) = done[n * 2 * dim..].split_at_mut(dim);
+            lo.fill(f64::INFINITY);
+            hi.fill(f64::NEG_INFINITY);
+            let mut widen = |a: &[f64], b: &[f64]| {
+                for (((l, h), &x), &y) in lo.iter_mut().zip(hi.iter_mut()).zip(a).zip(b) {
+                    *l = l.min(x);
+                    *h = h.max(y);
+                }
+            };
+            match self.nodes[n] {
+                KdNode::Leaf { start, end } => {
+                    for p in self.points[start as usize * dim..end as usize * dim].chunks_exact(dim) {
+                        widen(p, p);
+                    }
+                }
+                KdNode::Inner { low, high, .. } => {
+                    for child in [low, high] {
+                        let at = (child as usize - n - 1) * 2 * dim;
+                        let (clo, chi) = rest[at..at + 2 * dim].split_at(dim);
+                        widen(clo, chi);
+                    }
+                }
+            }
+        }
+        self.boxes = boxes;
+    }
+
+    /// Weighted squared distance from `q` (angles wrapped) to node `n`'s box: a lower bound on
+    /// the weighted squared distance to any of its states that never exceeds the leaves' own
+    /// sums (both round the same monotone operations).
+    #[inline]
+    fn box_distance2<const WRAP: bool>(&self, n: u32, q: &[f64]) -> f64 {
+        let dim = self.weights.len();
+        let b = &self.boxes[n as usize * 2 * dim..(n as usize + 1) * 2 * dim];
+        let (lo, hi) = b.split_at(dim);
+        let mut d2 = 0.0;
+        if !WRAP {
+            for (((&x, &l), &h), &w) in q.iter().zip(lo).zip(hi).zip(&self.weights) {
+                let d = w * (l - x).max(x - h).max(0.0);
+                d2 += d * d;
+            }
+        } else {
+            // Outside its interval, an angle's short way to any state of the box passes one of
+            // the interval's ends: across the nearer end (`d`), or round through ±π to the
+            // farther one (`period − width − d`, infinite for a coordinate that is no angle).
+            for ((((&x, &l), &h), &w), &period) in q.iter().zip(lo).zip(hi).zip(&self.weights).zip(&self.periods) {
+                let d = (l - x).max(x - h).max(0.0);
+                let d = w * d.min(period - (h - l) - d);
+                d2 += d * d;
+            }
+        }
+        d2
     }
 
     /// Coordinate `axis` of state `i`, wrapped into `(−π, π]` when it is an angle.
@@ -591,9 +661,6 @@ impl KdTree {
 
     /// Offers `c` the live states of this tree that may be within its radius of `q`.
     fn search<S: Space, C: Collector>(&self, space: &S, index: &NearestNeighbors, q: &[f64], c: &mut C) {
-        // Per-coordinate weighted offsets from `q` to the current cell (Arya & Mount's
-        // incremental distance): the squared bound is their sum of squares.
-        let mut offsets = [0.0f64; KD_MAX_DIM];
         if self.wraps.is_empty() {
             let mut search = KdSearch {
                 tree: self,
@@ -602,21 +669,23 @@ impl KdTree {
                 q,
                 wrapped: q,
             };
-            search.visit::<C, false>(0, 0.0, &mut offsets, c);
+            search.visit::<C, false>(0, 0.0, self.box_distance2::<false>(0, q), &mut [0.0; KD_MAX_DIM], c);
         } else {
             // The query with its angles wrapped like the tree's copies of the states.
             let mut wrapped = [0.0f64; KD_MAX_DIM];
             for ((w, &x), &wraps) in wrapped.iter_mut().zip(q).zip(&self.wraps) {
                 *w = if wraps { wrap_angle(x) } else { x };
             }
+            let wrapped = &wrapped[..q.len()];
             let mut search = KdSearch {
                 tree: self,
                 space,
                 index,
                 q,
-                wrapped: &wrapped[..q.len()],
+                wrapped,
             };
-            search.visit::<C, true>(0, 0.0, &mut offsets, c);
+            let root2 = self.box_distance2::<true>(0, wrapped);
+            search.visit::<C, true>(0, 0.0, root2, &mut [0.0; KD_MAX_DIM], c);
         }
     }
 }
@@ -632,10 +701,14 @@ struct KdSearch<'a, S> {
 }
 
 impl<S: Space> KdSearch<'_, S> {
-    /// `WRAP`: the tree has angles (`tree.wraps` is not empty).
+    /// Visits node `n`, whose cell lies `cell2` (weighted, squared: Arya & Mount's incremental
+    /// distance, the sum of the squared `offsets` per coordinate) and whose box or an
+    /// ancestor's lies `bound2 ≥ cell2` from the query. `WRAP`: the tree has angles
+    /// (`tree.wraps` is not empty).
     fn visit<C: Collector, const WRAP: bool>(
         &mut self,
         n: u32,
+        cell2: f64,
         bound2: f64,
         offsets: &mut [f64; KD_MAX_DIM],
         c: &mut C,
@@ -680,7 +753,7 @@ impl<S: Space> KdSearch<'_, S> {
                 let x = self.wrapped[axis];
                 let diff = x - split;
                 let (near, far) = if diff <= 0.0 { (low, high) } else { (high, low) };
-                self.visit::<C, WRAP>(near, bound2, offsets, c);
+                self.visit::<C, WRAP>(near, cell2, bound2, offsets, c);
                 let old = offsets[axis];
                 let new = if WRAP && self.tree.wraps[axis] {
                     // The far cell lies within [split, π] (or [−π, split]): reached either
@@ -691,8 +764,16 @@ impl<S: Space> KdSearch<'_, S> {
                 } else {
                     self.tree.weights[axis] * diff.abs()
                 };
+                let far_cell2 = cell2 - old * old + new * new;
+                let r = c.radius() + SLACK;
+                if far_cell2.max(bound2) > r * r * (1.0 + 1e-12) {
+                    return;
+                }
+                // The split planes leave the far cell unbounded along the axes not split yet:
+                // its box is the tighter bound when the query is far from every state.
+                let far2 = far_cell2.max(self.tree.box_distance2::<WRAP>(far, self.wrapped));
                 offsets[axis] = new;
-                self.visit::<C, WRAP>(far, bound2 - old * old + new * new, offsets, c);
+                self.visit::<C, WRAP>(far, far_cell2, far2, offsets, c);
                 offsets[axis] = old;
             }
         }

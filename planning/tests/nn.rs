@@ -109,6 +109,40 @@ proptest! {
         }
     }
 
+    /// A tree stuck in a pocket, queried from the whole space: the states lie within `spread`
+    /// of one state (on the angles possibly across ±π), every query far from all of them. The
+    /// k-d trees prune with their nodes' boxes here, and must stay exact.
+    #[test]
+    fn pocketed_states_queried_from_afar(seed in any::<u64>(), n in 1usize..700, k in 1usize..12, spread in 0.01f64..0.6, across in any::<bool>()) {
+        let space = joint_space();
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let mut centre = vec![0.0; 4];
+        space.sample(&mut rng, &mut centre);
+        if across {
+            centre[1] = std::f64::consts::PI - 0.5 * spread;
+        }
+        let mut nn = NearestNeighbors::new(4);
+        let mut states = Vec::new();
+        let mut q = vec![0.0; 4];
+        for i in 0..n {
+            for (x, c) in q.iter_mut().zip(&centre) {
+                *x = c + spread * (2.0 * rand::RngExt::random::<f64>(&mut rng) - 1.0);
+            }
+            space.enforce_bounds(&mut q);
+            prop_assert_eq!(nn.insert(&q), i);
+            states.push(q.clone());
+        }
+        for _ in 0..20 {
+            space.sample(&mut rng, &mut q);
+            let mut by_distance: Vec<(f64, usize)> =
+                states.iter().enumerate().map(|(i, p)| (space.distance(&q, p), i)).collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let expected: Vec<usize> = by_distance.iter().take(k).map(|e| e.1).collect();
+            prop_assert_eq!(nn.k_nearest(&space, &q, k), expected);
+            prop_assert_eq!(nn.nearest(&space, &q), Some(by_distance[0].1));
+        }
+    }
+
     #[test]
     fn se2_space_with_wrapping_yaw(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
         agrees_with_brute_force(&se2_space(), seed, n, remove, k, 0.8);
