@@ -15,7 +15,7 @@ use crate::validity::StateValidator;
 /// `range` until it is reached or blocked: by default the other tree grows from its nearest
 /// state towards the new one ([`Connect::Other`], Kuffner & LaValle's and OMPL's);
 /// [`Connect::Onward`] lets the tree that just grew go on towards the other tree instead (as
-/// VAMP's RRT-Connect does), which suits goals wedged in pockets. Tree balancing
+/// VAMP's RRT-Connect does; measured, it helps neither robot's MotionBenchMaker problems). Tree balancing
 /// ([`BiRrt::balance`], as in VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper
 /// tree of short steps for a tree that barely grows) are on by default; dynamic-domain
 /// sampling ([`DynamicDomain`]) is available but off, because it lowered success on the
@@ -92,9 +92,11 @@ pub enum Connect {
     Other,
     /// The tree that just grew goes on from its new state towards the other tree's state
     /// nearest to it (VAMP's RRT-Connect): a tree outside a pocket heads for the pocketed
-    /// tree, and a pocketed tree that found a way out goes on along it. On the hardest
-    /// MotionBenchMaker Fetch problems (goals wedged between shelf boards or cage bars) this
-    /// solves 56 of 176 plans within 1 s against 38 (`docs/benchmarks.md`).
+    /// tree, and a pocketed tree that found a way out goes on along it. Measured on the
+    /// MotionBenchMaker problems it does not pay: the hardest Fetch problems (goals wedged
+    /// between shelf boards or cage bars) are solved in 54 of 176 plans within 1 s against 74
+    /// with [`Connect::Other`], and the Panda's open problems are planned more slowly
+    /// (`docs/benchmarks.md`).
     Onward,
 }
 
