@@ -143,48 +143,32 @@ fn nearest_neighbours(c: &mut Criterion) {
     continuous[0] = true;
     let torus = JointSpace::new(&lower, &upper, &continuous).expect("valid bounds");
     let mut g = c.benchmark_group("nn");
-    for (name, space) in [("nearest_20k_kd", &kd), ("nearest_20k_torus", &torus)] {
-        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
-        let mut nn = NearestNeighbors::new(7);
-        let mut q = [0.0; 7];
-        for _ in 0..20_000 {
-            space.sample(&mut rng, &mut q);
-            nn.insert(&q);
-            nn.nearest(space, &q);
-        }
-        let queries: Vec<[f64; 7]> = (0..256)
-            .map(|_| {
-                space.sample(&mut rng, &mut q);
-                q
-            })
-            .collect();
-        let mut i = 0;
-        g.bench_function(name, |b| {
-            b.iter(|| {
-                i = (i + 1) % queries.len();
-                black_box(nn.nearest(space, &queries[i]))
-            })
-        });
-        g.bench_function(name.replace("nearest", "k10"), |b| {
-            b.iter(|| {
-                i = (i + 1) % queries.len();
-                black_box(nn.k_nearest(space, &queries[i], 10))
-            })
-        });
-    }
-    // A tree stuck in a pocket: 1,000 states within ±0.3 rad of one configuration, queried
-    // with samples from the whole space (every query is far from every state).
-    for (name, space) in [("nearest_1k_pocket_kd", &kd), ("nearest_1k_pocket_torus", &torus)] {
-        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+    // Random states of the whole space, or (`pocket`) a tree stuck in a pocket: 1,000 states
+    // within ±0.3 rad of one configuration, queried with samples from the whole space (every
+    // query is far from every state).
+    let cases = [
+        ("20k_kd", &kd, false),
+        ("20k_torus", &torus, false),
+        ("1k_pocket_kd", &kd, true),
+        ("1k_pocket_torus", &torus, true),
+    ];
+    for (name, space, pocket) in cases {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(if pocket { 5 } else { 4 });
         let mut centre = [0.0; 7];
-        space.sample(&mut rng, &mut centre);
+        if pocket {
+            space.sample(&mut rng, &mut centre);
+        }
         let mut nn = NearestNeighbors::new(7);
         let mut q = [0.0; 7];
-        for _ in 0..1_000 {
-            for (x, c) in q.iter_mut().zip(&centre) {
-                *x = c + rng.random_range(-0.3..0.3);
+        for _ in 0..if pocket { 1_000 } else { 20_000 } {
+            if pocket {
+                for (x, c) in q.iter_mut().zip(&centre) {
+                    *x = c + rng.random_range(-0.3..0.3);
+                }
+                space.enforce_bounds(&mut q);
+            } else {
+                space.sample(&mut rng, &mut q);
             }
-            space.enforce_bounds(&mut q);
             nn.insert(&q);
             nn.nearest(space, &q);
         }
@@ -195,12 +179,20 @@ fn nearest_neighbours(c: &mut Criterion) {
             })
             .collect();
         let mut i = 0;
-        g.bench_function(name, |b| {
+        g.bench_function(format!("nearest_{name}"), |b| {
             b.iter(|| {
                 i = (i + 1) % queries.len();
                 black_box(nn.nearest(space, &queries[i]))
             })
         });
+        if !pocket {
+            g.bench_function(format!("k10_{name}"), |b| {
+                b.iter(|| {
+                    i = (i + 1) % queries.len();
+                    black_box(nn.k_nearest(space, &queries[i], 10))
+                })
+            });
+        }
     }
     g.finish();
 }
