@@ -319,21 +319,51 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
             continue;
         }
         repaired += 1;
-        if let Some(graze) = first_collision(space, validator, &w[0], &w[1], fine_resolution)
-            && let Some(via) = bypass(space, &mut fine, validator, [&w[0], &w[1]], &graze, rng)
-        {
-            out.push(via);
-            out.push(w[1].clone());
-            continue;
-        }
-        let left = budget.saturating_sub(clock.start.elapsed()).as_secs_f64().max(1e-3);
-        let request = PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone()));
-        let range = (space.distance(&w[0], &w[1]) / 4.0).clamp(10.0 * fine_resolution, 0.25);
-        let mut planner = BiRrt::with_range(Some(range));
-        let solution = planner.plan(&mut fine, validator, &request, &Budget::time(left), rng)?;
-        out.extend(solution.path.states.into_iter().skip(1));
+        let graze = first_collision(space, validator, &w[0], &w[1], fine_resolution);
+        let left = budget.saturating_sub(clock.start.elapsed());
+        let ends = [&w[0][..], &w[1][..]];
+        out.extend(reroute(
+            &mut fine,
+            validator,
+            ends,
+            graze.as_deref(),
+            fine_resolution,
+            left,
+            rng,
+        )?);
+        out.push(w[1].clone());
     }
     Ok((Path { states: out }, repaired))
+}
+
+/// The states strictly between `ends` of a motion that replaces the straight one between them
+/// and passes `fine`: one sideways waypoint near `graze` ([`bypass`]) when there is a graze
+/// and one is found, else a BiRRT path planned at `fine`'s resolution with a step of a quarter
+/// of the edge (at least 10 × `resolution`, at most 0.25) within `budget` (at least 1 ms).
+fn reroute<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+    fine: &mut MotionValidator<S>,
+    validator: &mut V,
+    ends: [&[f64]; 2],
+    graze: Option<&[f64]>,
+    resolution: f64,
+    budget: Duration,
+    rng: &mut R,
+) -> Result<Vec<Vec<f64>>, PlanError> {
+    let space = fine.space().clone();
+    if let Some(graze) = graze
+        && let Some(via) = bypass(&space, fine, validator, ends, graze, rng)
+    {
+        return Ok(vec![via]);
+    }
+    let request = PlanRequest::new(ends[0].to_vec(), Goal::Config(ends[1].to_vec()));
+    let range = (space.distance(ends[0], ends[1]) / 4.0).clamp(10.0 * resolution, 0.25);
+    let budget = Budget::time(budget.as_secs_f64().max(1e-3));
+    let states = BiRrt::with_range(Some(range))
+        .plan(fine, validator, &request, &budget, rng)?
+        .path
+        .states;
+    let inner = states.len().saturating_sub(1);
+    Ok(states.into_iter().take(inner).skip(1).collect())
 }
 
 /// The first state on the straight motion `a → b`, sampled at `resolution`, that `validator`
@@ -489,9 +519,14 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let mut trajectory = rest_to_rest.clone();
     let mut current = repaired_path.clone();
     let mut out_parabolic = ShortcutStats::default();
-    // Whether `trajectory` passes the verification check (or none is asked for), once known.
-    let mut passes = None;
-    if smoothing == Smoothing::Parabolic {
+    // Whether a trajectory passes the verification check (or none is asked for).
+    let verify = |trajectory: &Trajectory, validator: &mut V| {
+        settings
+            .verify_resolution
+            .is_none_or(|r| trajectory.check(&space, validator, r).is_ok())
+    };
+    let passes = if smoothing == Smoothing::Parabolic {
+        let mut ok = false;
         // A shortcut motion that fails the verification (a graze between the samples of its
         // ramp checks) is shortcut afresh from the rest-to-rest timing, with other random
         // pairs, before the pipeline falls back to an unshortcut motion.
@@ -503,21 +538,16 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
             out_parabolic.attempts += stats.attempts;
             out_parabolic.accepted += stats.accepted;
             out_parabolic.time += stats.time;
-            let ok = settings
-                .verify_resolution
-                .is_none_or(|r| trajectory.check(&space, validator, r).is_ok());
-            passes = Some(ok);
+            ok = verify(&trajectory, validator);
             if ok {
                 break;
             }
         }
         current = trajectory.to_path(&space, motion.resolution());
-    }
-    let passes = passes.unwrap_or_else(|| {
-        settings
-            .verify_resolution
-            .is_none_or(|r| trajectory.check(&space, validator, r).is_ok())
-    });
+        ok
+    } else {
+        verify(&trajectory, validator)
+    };
     let mut fell_back = false;
     if let Some(r) = settings.verify_resolution
         && !passes
@@ -639,16 +669,16 @@ fn detour<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     };
     let mut fine = MotionValidator::new(space.clone(), 0.5 * resolution);
     let mut out = states[..=from].to_vec();
-    if let Some(via) = bypass(space, &mut fine, &mut avoiding, [&states[from], &states[to]], bad, rng) {
-        out.push(via);
-    } else {
-        let request = PlanRequest::new(states[from].clone(), Goal::Config(states[to].clone()));
-        let range = (space.distance(&states[from], &states[to]) / 4.0).clamp(10.0 * resolution, 0.25);
-        let budget = Budget::time(budget.as_secs_f64().max(1e-3));
-        let solution = BiRrt::with_range(Some(range)).plan(&mut fine, &mut avoiding, &request, &budget, rng)?;
-        let inner = solution.path.states.len().saturating_sub(1);
-        out.extend(solution.path.states.into_iter().take(inner).skip(1));
-    }
+    let ends = [&states[from][..], &states[to][..]];
+    out.extend(reroute(
+        &mut fine,
+        &mut avoiding,
+        ends,
+        Some(bad),
+        resolution,
+        budget,
+        rng,
+    )?);
     out.extend(states[to..].iter().cloned());
     Ok(Path { states: out })
 }
