@@ -146,14 +146,15 @@ impl ParryScene {
 impl ParryScene {
     /// [`Obstacles::first_hit`] for small scenes without a margin: a scan of the bounding
     /// boxes, closed forms for a ball (against every obstacle kind but meshes) and for a box
-    /// against a box, the box around a cylinder against a box before parry's test, parry for
-    /// the rest.
+    /// against a box; a cylinder against a box is tested as the box around it first, then by
+    /// the closed-form certificates of [`cylinder_meets_box`], and by parry only where those
+    /// do not settle it; parry for the rest.
     fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
         if let Some(ball) = shape.as_ball() {
             return self.scan_ball(pose.translation, ball.radius);
         }
         // A box is its own box; a cylinder (axis local y) is tested as the box around it
-        // first, and by parry only when that box touches.
+        // first, then in closed form, and by parry only when neither settles it.
         let (obb, exact) = if let Some(cuboid) = shape.as_cuboid() {
             (Obb::at(pose, cuboid.half_extents), true)
         } else if let Some(c) = shape.as_cylinder() {
@@ -164,7 +165,10 @@ impl ParryScene {
                 .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose));
         };
         self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
-            Quick::Cuboid(other) => obb.touches(other) && (exact || self.touches(i as u32, shape, pose)),
+            Quick::Cuboid(other) => {
+                obb.touches(other)
+                    && (exact || cylinder_meets_box(&obb, other).unwrap_or_else(|| self.touches(i as u32, shape, pose)))
+            }
             _ => self.touches(i as u32, shape, pose),
         })
     }
@@ -359,6 +363,110 @@ impl Obb {
 
 /// Added to every absolute rotation term of the box-box test (see [`Obb::touches`]).
 const OBB_PARALLEL_SLACK: Real = 1e-6;
+
+/// Distance by which the closed-form cylinder-box certificates below stay on the safe side of
+/// every comparison, far above f32 rounding at the sizes of robots and furniture.
+const CYLINDER_BOX_SLACK: Real = 1e-5;
+
+/// Whether a cylinder meets a box, where a closed form settles it: `Some(false)` when one of
+/// eight candidate axes separates them, `Some(true)` when a point lies inside both, `None`
+/// otherwise (the caller then asks parry's GJK test). On cylinders whose bounding boxes
+/// overlap a board, [`ParryScene::first_hit`] takes ~100 ns with these forms against ~220 ns
+/// without them (parry's test alone: ~410 ns); the Panda's MotionBenchMaker cage plans leave
+/// one cylinder-box test in twenty to parry, the Fetch's wedged bookshelf goals one in three.
+///
+/// `cylinder` is the cylinder's bounding box as [`Obb::at`] builds it from parry's cylinder:
+/// axis `axes[1]`, half height `half.y`, radius `half.x`.
+///
+/// - *Separation.* The box's three face normals, the cylinder's axis, the axis crossed with
+///   each box edge direction, and the direction from the axis to the box's centre. Along a unit
+///   direction `n` the cylinder reaches `h |n·a| + r √(1 − (n·a)²)` from its centre and the box
+///   `Σ e_i |n·u_i|` from its centre; a gap between the two intervals proves them apart. These
+///   are the exact separating directions for a box face against the cylinder, and for a box
+///   edge against the cylinder's side, which is how a link grazes a shelf board.
+/// - *Contact.* The cylinder's farthest point towards the box along each face normal or along
+///   the direction to the box's centre inside the box (shrunk by the slack), or a point of the
+///   box inside the cylinder ([`box_point_in_cylinder`]), proves contact: a link dipping into
+///   a board or lying across its edge.
+fn cylinder_meets_box(cylinder: &Obb, b: &Obb) -> Option<bool> {
+    let (c, a) = (cylinder.center, cylinder.axes[1]);
+    let (h, r) = (cylinder.half.y, cylinder.half.x);
+    let d = b.center - c;
+    let reach_cylinder = |n: Vector| {
+        let na = n.dot(a);
+        h * na.abs() + r * (1.0 - na * na).max(0.0).sqrt()
+    };
+    let reach_box = |n: Vector| {
+        b.half.x * n.dot(b.axes[0]).abs() + b.half.y * n.dot(b.axes[1]).abs() + b.half.z * n.dot(b.axes[2]).abs()
+    };
+    let apart = |n: Vector| d.dot(n).abs() > reach_cylinder(n) + reach_box(n) + CYLINDER_BOX_SLACK;
+    let across = d - a * d.dot(a);
+    let towards_centre = (across.length_squared() > 1e-12).then(|| across.normalize());
+    if b.axes.iter().any(|&u| apart(u)) || apart(a) {
+        return Some(false);
+    }
+    for u in b.axes.iter().map(|&u| a.cross(u)).chain(towards_centre) {
+        let len2 = u.length_squared();
+        if len2 > 1e-6 && apart(u / len2.sqrt()) {
+            return Some(false);
+        }
+    }
+    // A point strictly inside the box, in its frame.
+    let inside = |p: Vector| {
+        let q = p - b.center;
+        (0..3).all(|k| q.dot(b.axes[k]).abs() <= b.half[k] - CYLINDER_BOX_SLACK)
+    };
+    // The cylinder's farthest point along `n` (unit), pulled in by the slack.
+    let farthest = |n: Vector| {
+        let na = n.dot(a);
+        let side = n - a * na;
+        let len = side.length();
+        let rim = if len > 1e-6 {
+            side * ((r - CYLINDER_BOX_SLACK).max(0.0) / len)
+        } else {
+            Vector::ZERO
+        };
+        c + a * ((h - CYLINDER_BOX_SLACK).max(0.0) * na.signum()) + rim
+    };
+    let toward_box = b.axes.map(|u| if u.dot(d) >= 0.0 { u } else { -u });
+    let hit = toward_box
+        .into_iter()
+        .chain(towards_centre)
+        .any(|n| inside(farthest(n)))
+        || box_point_in_cylinder(c, a, h, r, b);
+    hit.then_some(true)
+}
+
+/// Whether a point of the box certainly lies inside the cylinder (centre `c`, unit axis `a`,
+/// half height `h`, radius `r`, all shrunk by the slack): the box points nearest to the axis,
+/// found by alternating projections between the axis and the box (which converge to a closest
+/// pair of the two convex sets), eight rounds at most. Answers `false` when unsure, never
+/// `true` wrongly. This settles a link lying across the edge of a board.
+fn box_point_in_cylinder(c: Vector, a: Vector, h: Real, r: Real, b: &Obb) -> bool {
+    let (h, r) = (h - CYLINDER_BOX_SLACK, r - CYLINDER_BOX_SLACK);
+    if h <= 0.0 || r <= 0.0 {
+        return false;
+    }
+    let mut t = (b.center - c).dot(a).clamp(-h, h);
+    for _ in 0..8 {
+        let q = c + a * t - b.center;
+        let nearest = b.center
+            + b.axes[0] * q.dot(b.axes[0]).clamp(-b.half.x, b.half.x)
+            + b.axes[1] * q.dot(b.axes[1]).clamp(-b.half.y, b.half.y)
+            + b.axes[2] * q.dot(b.axes[2]).clamp(-b.half.z, b.half.z);
+        let from_centre = nearest - c;
+        let along = from_centre.dot(a);
+        if along.abs() <= h && (from_centre - a * along).length_squared() <= r * r {
+            return true;
+        }
+        let next = along.clamp(-h, h);
+        if (next - t).abs() < 1e-6 {
+            return false;
+        }
+        t = next;
+    }
+    false
+}
 
 /// A ball test in closed form: the obstacle's shape in its own frame.
 #[derive(Clone, Debug)]
