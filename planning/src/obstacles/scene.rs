@@ -373,7 +373,7 @@ const CYLINDER_BOX_SLACK: Real = 1e-5;
 /// otherwise (the caller then asks parry's GJK test). On cylinders whose bounding boxes
 /// overlap a board, [`ParryScene::first_hit`] takes ~100 ns with these forms against ~220 ns
 /// without them (parry's test alone: ~410 ns); the Panda's MotionBenchMaker cage plans leave
-/// one cylinder-box test in twenty to parry, the Fetch's wedged bookshelf goals one in three.
+/// one cylinder-box test in thirty to parry, the Fetch's wedged bookshelf goals one in eight.
 ///
 /// `cylinder` is the cylinder's bounding box as [`Obb::at`] builds it from parry's cylinder:
 /// axis `axes[1]`, half height `half.y`, radius `half.x`.
@@ -384,10 +384,11 @@ const CYLINDER_BOX_SLACK: Real = 1e-5;
 ///   `Σ e_i |n·u_i|` from its centre; a gap between the two intervals proves them apart. These
 ///   are the exact separating directions for a box face against the cylinder, and for a box
 ///   edge against the cylinder's side, which is how a link grazes a shelf board.
-/// - *Contact.* The cylinder's farthest point towards the box along each face normal or along
-///   the direction to the box's centre inside the box (shrunk by the slack), or a point of the
-///   box inside the cylinder ([`box_point_in_cylinder`]), proves contact: a link dipping into
-///   a board or lying across its edge.
+/// - *Contact.* The cylinder's farthest point inside the box (shrunk by the slack) along each
+///   face normal, along the direction to the box's centre or along the direction to the box's
+///   point nearest the cylinder's centre; or a point of the box inside the cylinder
+///   ([`box_point_in_cylinder`]). Either proves contact: a link dipping into a board, lying
+///   across its edge, or a thin slice of a link cutting its corner.
 fn cylinder_meets_box(cylinder: &Obb, b: &Obb) -> Option<bool> {
     let (c, a) = (cylinder.center, cylinder.axes[1]);
     let (h, r) = (cylinder.half.y, cylinder.half.x);
@@ -429,9 +430,17 @@ fn cylinder_meets_box(cylinder: &Obb, b: &Obb) -> Option<bool> {
         c + a * ((h - CYLINDER_BOX_SLACK).max(0.0) * na.signum()) + rim
     };
     let toward_box = b.axes.map(|u| if u.dot(d) >= 0.0 { u } else { -u });
+    // Towards the box's point nearest the cylinder's centre.
+    let q = c - b.center;
+    let nearest = b.center
+        + b.axes[0] * q.dot(b.axes[0]).clamp(-b.half.x, b.half.x)
+        + b.axes[1] * q.dot(b.axes[1]).clamp(-b.half.y, b.half.y)
+        + b.axes[2] * q.dot(b.axes[2]).clamp(-b.half.z, b.half.z);
+    let towards_nearest = (nearest - c).try_normalize();
     let hit = toward_box
         .into_iter()
         .chain(towards_centre)
+        .chain(towards_nearest)
         .any(|n| inside(farthest(n)))
         || box_point_in_cylinder(c, a, h, r, b);
     hit.then_some(true)
