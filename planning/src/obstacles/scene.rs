@@ -305,6 +305,21 @@ impl Obb {
         }
     }
 
+    /// Its point nearest to `p` (`p` itself when inside).
+    fn nearest_point(&self, p: Vector) -> Vector {
+        let q = p - self.center;
+        self.center
+            + self.axes[0] * q.dot(self.axes[0]).clamp(-self.half.x, self.half.x)
+            + self.axes[1] * q.dot(self.axes[1]).clamp(-self.half.y, self.half.y)
+            + self.axes[2] * q.dot(self.axes[2]).clamp(-self.half.z, self.half.z)
+    }
+
+    /// Whether `p` lies inside it by more than `margin` along every axis.
+    fn holds(&self, p: Vector, margin: Real) -> bool {
+        let q = p - self.center;
+        (0..3).all(|k| q.dot(self.axes[k]).abs() <= self.half[k] - margin)
+    }
+
     /// The world-aligned box around it.
     fn aabb(&self) -> Aabb {
         let [a, b, c] = self.axes;
@@ -412,11 +427,6 @@ fn cylinder_meets_box(cylinder: &Obb, b: &Obb) -> Option<bool> {
             return Some(false);
         }
     }
-    // A point strictly inside the box, in its frame.
-    let inside = |p: Vector| {
-        let q = p - b.center;
-        (0..3).all(|k| q.dot(b.axes[k]).abs() <= b.half[k] - CYLINDER_BOX_SLACK)
-    };
     // The cylinder's farthest point along `n` (unit), pulled in by the slack.
     let farthest = |n: Vector| {
         let na = n.dot(a);
@@ -430,18 +440,12 @@ fn cylinder_meets_box(cylinder: &Obb, b: &Obb) -> Option<bool> {
         c + a * ((h - CYLINDER_BOX_SLACK).max(0.0) * na.signum()) + rim
     };
     let toward_box = b.axes.map(|u| if u.dot(d) >= 0.0 { u } else { -u });
-    // Towards the box's point nearest the cylinder's centre.
-    let q = c - b.center;
-    let nearest = b.center
-        + b.axes[0] * q.dot(b.axes[0]).clamp(-b.half.x, b.half.x)
-        + b.axes[1] * q.dot(b.axes[1]).clamp(-b.half.y, b.half.y)
-        + b.axes[2] * q.dot(b.axes[2]).clamp(-b.half.z, b.half.z);
-    let towards_nearest = (nearest - c).try_normalize();
+    let towards_nearest = (b.nearest_point(c) - c).try_normalize();
     let hit = toward_box
         .into_iter()
         .chain(towards_centre)
         .chain(towards_nearest)
-        .any(|n| inside(farthest(n)))
+        .any(|n| b.holds(farthest(n), CYLINDER_BOX_SLACK))
         || box_point_in_cylinder(c, a, h, r, b);
     hit.then_some(true)
 }
@@ -458,12 +462,7 @@ fn box_point_in_cylinder(c: Vector, a: Vector, h: Real, r: Real, b: &Obb) -> boo
     }
     let mut t = (b.center - c).dot(a).clamp(-h, h);
     for _ in 0..8 {
-        let q = c + a * t - b.center;
-        let nearest = b.center
-            + b.axes[0] * q.dot(b.axes[0]).clamp(-b.half.x, b.half.x)
-            + b.axes[1] * q.dot(b.axes[1]).clamp(-b.half.y, b.half.y)
-            + b.axes[2] * q.dot(b.axes[2]).clamp(-b.half.z, b.half.z);
-        let from_centre = nearest - c;
+        let from_centre = b.nearest_point(c + a * t) - c;
         let along = from_centre.dot(a);
         if along.abs() <= h && (from_centre - a * along).length_squared() <= r * r {
             return true;
