@@ -18,6 +18,7 @@ use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
     PlanRequest, Planner, RobotValidity, Rrt, StateValidator,
 };
+use hearth_sim::randomize::mix;
 use rand::SeedableRng;
 use serde_json::{Value, json};
 
@@ -258,15 +259,9 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
 }
 
 /// The seed of one plan's random stream: the bench's seed, the problem id and the repeat,
-/// mixed (SplitMix64's finaliser after each) so that no two of them share a stream. (XOR-ing
-/// them gave seed 1's repeats 0 and 1 the streams of seed 0's repeats 1 and 0.)
+/// mixed ([`mix`], SplitMix64's finaliser, after each) so that no two of them share a stream.
+/// (XOR-ing them gave seed 1's repeats 0 and 1 the streams of seed 0's repeats 1 and 0.)
 fn plan_seed(seed: u64, id: u32, repeat: u32) -> u64 {
-    fn mix(mut z: u64) -> u64 {
-        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
     mix(mix(mix(seed) ^ u64::from(id)) ^ u64::from(repeat))
 }
 

@@ -84,7 +84,7 @@ pub use error::RandomizeError;
 pub use noise::{DepthNoise, START_POSE_TRIES, add_depth_noise, camera_offset, perturb_pose2d, perturb_robot_start};
 pub use objects::{ObjectReport, ObjectSwap, randomize_objects};
 pub use physics::{PhysicsReport, randomize_physics};
-pub use sampling::{Stream, stream};
+pub use sampling::{Stream, mix, stream};
 pub use visual::{ClassLook, VisualRandomization, class_look};
 
 use crate::scene::{MapOptions, SceneFile, SceneMaps};

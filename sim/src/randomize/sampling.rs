@@ -29,8 +29,15 @@ pub enum Stream {
     Noise = 6,
 }
 
-/// SplitMix64 finaliser: a bijective 64-bit mixer.
-pub(crate) fn mix(mut z: u64) -> u64 {
+/// SplitMix64 finaliser: a bijective 64-bit mixer, for deriving unrelated seeds from
+/// related numbers (a run seed and an index).
+///
+/// ```
+/// use hearth_sim::randomize::mix;
+/// assert_ne!(mix(0), mix(1));
+/// assert_ne!(mix(mix(0) ^ 1), mix(mix(1) ^ 0));
+/// ```
+pub fn mix(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
