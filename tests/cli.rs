@@ -481,7 +481,13 @@ fn bench_plan_writes_results_json() {
         ),
         (
             &["--no-escape", "--planner", "lazyprm"][..],
-            "--no-escape applies to --planner birrt only",
+            "apply to --planner birrt only",
+        ),
+        (&["--escape-probe", "1"][..], "--escape-probe must be in [0, 1)"),
+        (&["--escape-share", "0"][..], "--escape-share must be in (0, 1)"),
+        (
+            &["--no-escape", "--escape-probe", "0.5"][..],
+            "set the escape that --no-escape turns off",
         ),
         (
             &["--connect", "onward", "--planner", "rrt"][..],

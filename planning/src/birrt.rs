@@ -181,15 +181,21 @@ impl Default for DynamicDomain {
 /// thousands of tries, while shorter steps would find the way out. Once a tree has grown by
 /// fewer than one state per `stuck_ratio` extension attempts (after at least `after`
 /// attempts), a share `share` of its turns goes to a helper tree rooted at its roots and
-/// grown with steps of `step × range`. Each helper turn first tries a step of `join × range`
-/// from the helper state nearest the sample: when that succeeds, the helper's branch and the new
-/// state join the tree, which goes on as before from outside the pocket. The helper's short
-/// steps never become the tree's own states otherwise, so states inside the pocket do not
-/// become the nearest neighbours of later samples.
+/// grown with steps of `step × range`. A share `probe` of the helper's turns are probes: a
+/// step of a third of the helper's step from the helper state nearest the sample towards it,
+/// whose direction the helper remembers when it is free. The recent free directions give the
+/// shape of the pocket's way out (the helper's channel, see [`probe`](Escape::probe)). The
+/// other helper turns steer from the helper state nearest the sample towards the sample bent
+/// by that shape, and first try a step of `join × range`: when that succeeds, the helper's
+/// branch and the new state join the tree, which goes on as before from outside the pocket;
+/// else a step of `step × range` grows the helper. The helper's short steps never become the
+/// tree's own states otherwise, so states inside the pocket do not become the
+/// nearest neighbours of later samples.
 ///
 /// ```
 /// let e = hearth_planning::birrt::Escape::default();
 /// assert!(e.step < 1.0 && e.share > 0.0 && e.share < 1.0);
+/// assert!(e.probe > 0.0 && e.probe < 1.0);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -205,6 +211,14 @@ pub struct Escape {
     /// The step that lets a helper state join the tree, as a fraction of the planner's step,
     /// in [`step`](Escape::step), 1].
     pub join: f64,
+    /// Share of the helper's turns, in [0, 1), spent on probes: steps of a third of the
+    /// helper's step towards the sample (a uniformly random direction), which teach the
+    /// helper which directions are free near its frontier. Once eight probes were free, the
+    /// other turns steer through the learnt channel: the displacement to the sample is
+    /// multiplied by the second moment of the last 32 free probe directions (plus a twentieth
+    /// of its mean eigenvalue), which squashes the directions the pocket leaves no room in.
+    /// 0 turns the channel off: every helper turn steers straight at its sample.
+    pub probe: f64,
 }
 
 impl Default for Escape {
@@ -215,6 +229,7 @@ impl Default for Escape {
             share: 0.5,
             step: 0.25,
             join: 0.5,
+            probe: 0.5,
         }
     }
 }
@@ -224,6 +239,107 @@ impl Default for Escape {
 struct Helper {
     tree: Tree,
     joined: Vec<Option<usize>>,
+    channel: Channel,
+}
+
+/// Directions recently found free by a helper's probes: the shape of the channel a wedged
+/// tree has to leave through.
+///
+/// A goal wedged between shelf boards leaves free motions that are long in some directions
+/// and very short in others: at the Fetch's eleven hardest MotionBenchMaker goals the second
+/// moment of the free 0.1 rad steps' directions has two eigenvalues of 0.003–0.03, against
+/// 0.06–0.27 for the other six. Steering towards a sample through that second moment (the
+/// displacement multiplied by it, so the thin directions are squashed) makes 6–17× more
+/// 0.3 rad steps from those goals free than steering straight at the sample
+/// (`docs/benchmarks.md`, fifteenth round). This is principal-component analysis of the local free space, as in
+/// Dalibard & Laumond's PCA-guided RRT ("Control of probabilistic diffusion in motion
+/// planning", WAFR 2008), learnt here from short probes rather than from the tree's states. The memory is short ([`CHANNEL_MEMORY`] directions), so the shape follows the
+/// helper's frontier as the channel turns.
+struct Channel {
+    dim: usize,
+    /// Ring of unit directions, `CHANNEL_MEMORY × dim`.
+    dirs: Vec<f64>,
+    /// Directions held (at most `CHANNEL_MEMORY`) and the next slot to write.
+    held: usize,
+    next: usize,
+    /// Sum of the held directions' outer products, `dim × dim`.
+    moment: Vec<f64>,
+    /// Scratch: a displacement and its shaped image.
+    delta: Vec<f64>,
+    shaped: Vec<f64>,
+}
+
+/// Free directions a [`Channel`] remembers.
+const CHANNEL_MEMORY: usize = 32;
+/// Free directions a [`Channel`] needs before it shapes steps.
+const CHANNEL_READY: usize = 8;
+/// Share of the mean eigenvalue added to every direction of a channel's shape, so that no
+/// direction is shut off entirely.
+const CHANNEL_FLOOR: f64 = 0.05;
+
+impl Channel {
+    fn new(dim: usize) -> Self {
+        Self {
+            dim,
+            dirs: vec![0.0; CHANNEL_MEMORY * dim],
+            held: 0,
+            next: 0,
+            moment: vec![0.0; dim * dim],
+            delta: vec![0.0; dim],
+            shaped: vec![0.0; dim],
+        }
+    }
+
+    /// Remembers the direction from `from` to `to` (a free motion), forgetting the oldest.
+    fn record<S: Space>(&mut self, space: &S, from: &[f64], to: &[f64]) {
+        let d = self.dim;
+        space.difference(from, to, &mut self.delta);
+        let norm = self.delta.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return;
+        }
+        let slot = &mut self.dirs[self.next * d..][..d];
+        for (s, x) in slot.iter_mut().zip(&self.delta) {
+            *s = x / norm;
+        }
+        self.next = (self.next + 1) % CHANNEL_MEMORY;
+        self.held = (self.held + 1).min(CHANNEL_MEMORY);
+        // Recomputed from the held directions (rare: once per free probe), so no rounding
+        // drifts in from forgotten ones.
+        self.moment.fill(0.0);
+        for u in self.dirs.chunks_exact(d).take(self.held) {
+            for i in 0..d {
+                for j in 0..d {
+                    self.moment[i * d + j] += u[i] * u[j];
+                }
+            }
+        }
+    }
+
+    fn ready(&self) -> bool {
+        self.held >= CHANNEL_READY
+    }
+
+    /// Writes into `out` a target as far from `from` as `target` is, in the direction of
+    /// `target`'s displacement multiplied by the channel's shape (its second moment with a
+    /// floor of [`CHANNEL_FLOOR`]), within the bounds.
+    fn shape<S: Space>(&mut self, space: &S, from: &[f64], target: &[f64], out: &mut [f64]) {
+        let d = self.dim;
+        space.difference(from, target, &mut self.delta);
+        let trace: f64 = (0..d).map(|i| self.moment[i * d + i]).sum();
+        let floor = CHANNEL_FLOOR * trace / d as f64;
+        for i in 0..d {
+            let row = &self.moment[i * d..][..d];
+            self.shaped[i] = row.iter().zip(&self.delta).map(|(m, x)| m * x).sum::<f64>() + floor * self.delta[i];
+        }
+        let len = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let scale = len(&self.delta) / len(&self.shaped);
+        let scale = if scale.is_finite() { scale } else { 0.0 };
+        for ((o, f), s) in out.iter_mut().zip(from).zip(&self.shaped) {
+            *o = f + s * scale;
+        }
+        space.enforce_bounds(out);
+    }
 }
 
 impl Helper {
@@ -236,6 +352,7 @@ impl Helper {
         Self {
             tree,
             joined: (0..roots).map(Some).collect(),
+            channel: Channel::new(dim),
         }
     }
 
@@ -293,6 +410,7 @@ struct Stepper {
     domain: Option<(f64, f64, f64)>,
     step: Vec<f64>,
     from: Vec<f64>,
+    shaped: Vec<f64>,
 }
 
 impl Stepper {
@@ -310,9 +428,11 @@ impl Stepper {
         validator.is_valid(&self.step) && motion.check_motion(validator, from, &self.step)
     }
 
-    /// A helper turn of a stuck tree ([`Escape`]): a `long` step from the helper state nearest
-    /// `target`, which joins the tree with its branch when valid (returns its tree index),
-    /// else a `short` step that grows the helper.
+    /// A helper turn of a stuck tree ([`Escape`]) from the helper state nearest `target`:
+    /// either a `probe` step in the sample's direction that teaches the helper's [`Channel`]
+    /// when it is free, or, with the target shaped by the channel once it has learnt enough,
+    /// a `long` step, which joins the tree with its branch when valid (returns its tree
+    /// index), else a `short` step that grows the helper.
     #[allow(clippy::too_many_arguments)]
     fn escape<S: Space, V: StateValidator + ?Sized>(
         &mut self,
@@ -321,8 +441,7 @@ impl Stepper {
         grown: &mut Grown,
         helper: &mut Helper,
         target: &[f64],
-        short: f64,
-        long: f64,
+        (short, long, probe): (f64, f64, Option<f64>),
         chain: &mut Vec<usize>,
     ) -> Option<usize> {
         let near = helper
@@ -330,15 +449,33 @@ impl Stepper {
             .nn
             .nearest(motion.space(), target)
             .expect("helpers are never empty");
-        if self.try_step(motion, validator, helper.tree.state(near), target, long) {
-            let at = helper.join(near, grown, chain);
-            return Some(grown.add(&self.step, Some(at)));
+        if let Some(p) = probe {
+            if self.try_step(motion, validator, helper.tree.state(near), target, p) {
+                helper
+                    .channel
+                    .record(motion.space(), helper.tree.state(near), &self.step);
+            }
+            return None;
         }
-        if self.try_step(motion, validator, helper.tree.state(near), target, short) {
+        let mut shaped = std::mem::take(&mut self.shaped);
+        let aim: &[f64] = if helper.channel.ready() {
+            helper
+                .channel
+                .shape(motion.space(), helper.tree.state(near), target, &mut shaped);
+            &shaped
+        } else {
+            target
+        };
+        let mut joined = None;
+        if self.try_step(motion, validator, helper.tree.state(near), aim, long) {
+            let at = helper.join(near, grown, chain);
+            joined = Some(grown.add(&self.step, Some(at)));
+        } else if self.try_step(motion, validator, helper.tree.state(near), aim, short) {
             helper.tree.add(&self.step, Some(near));
             helper.joined.push(None);
         }
-        None
+        self.shaped = shaped;
+        joined
     }
 
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
@@ -451,10 +588,11 @@ impl<S: Space> Planner<S> for BiRrt {
                     && e.step > 0.0
                     && e.step <= e.join
                     && e.join <= 1.0
+                    && (0.0..1.0).contains(&e.probe)
                     && e.stuck_ratio > 0)
                 {
                     return Err(PlanError::BadInput(format!(
-                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, stuck_ratio positive"
+                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, probe in [0, 1), stuck_ratio positive"
                     )));
                 }
                 Some(e)
@@ -473,6 +611,7 @@ impl<S: Space> Planner<S> for BiRrt {
             domain,
             step: vec![0.0; dim],
             from: vec![0.0; dim],
+            shaped: vec![0.0; dim],
         };
         let roots = [1, goals.len()];
         let mut attempts = [0u64; 2];
@@ -513,16 +652,18 @@ impl<S: Space> Planner<S> for BiRrt {
                 _ => None,
             };
             let extended = match helper {
-                Some((h, e)) => stepper.escape(
-                    motion,
-                    validator,
-                    this,
-                    h,
-                    &target,
-                    e.step * range,
-                    e.join * range,
-                    &mut chain,
-                ),
+                Some((h, e)) => {
+                    let probe = (e.probe > 0.0 && rng.random::<f64>() < e.probe).then(|| e.step * range / 3.0);
+                    stepper.escape(
+                        motion,
+                        validator,
+                        this,
+                        h,
+                        &target,
+                        (e.step * range, e.join * range, probe),
+                        &mut chain,
+                    )
+                }
                 None => stepper.extend(motion, validator, this, &target),
             };
             let Some(i) = extended else {
@@ -557,5 +698,45 @@ impl<S: Space> Planner<S> for BiRrt {
             path: Path { states },
             stats,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::space::JointSpace;
+
+    /// A channel that has only seen free directions in the x-y plane steers a target off that
+    /// plane back into it (up to the floor), keeps the displacement's length and stays in
+    /// the bounds; it forgets all but its last `CHANNEL_MEMORY` directions.
+    #[test]
+    fn a_channel_squashes_the_directions_it_never_saw_free() {
+        let space = JointSpace::new(&[-2.0; 3], &[2.0; 3], &[false; 3]).unwrap();
+        let mut channel = Channel::new(3);
+        let origin = [0.0; 3];
+        for k in 0..CHANNEL_READY {
+            assert!(!channel.ready());
+            let a = k as f64 * 0.7;
+            channel.record(&space, &origin, &[a.cos() * 0.1, a.sin() * 0.1, 0.0]);
+        }
+        assert!(channel.ready());
+        let mut out = [0.0; 3];
+        channel.shape(&space, &origin, &[0.5, 0.5, 0.5], &mut out);
+        let len = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((len(&out) - len(&[0.5; 3])).abs() < 1e-12, "{out:?}");
+        // The floor leaves z a twentieth or so of what x and y get.
+        assert!(out[2] > 0.0 && out[2] < 0.1 * out[0].min(out[1]), "{out:?}");
+        // Clamped into the bounds.
+        channel.shape(&space, &[1.9, 0.0, 0.0], &[10.0, 0.0, 0.0], &mut out);
+        assert_eq!(out[0], 2.0);
+        // Directions along z, recorded past the memory, replace the x-y ones entirely.
+        for _ in 0..CHANNEL_MEMORY {
+            channel.record(&space, &origin, &[0.0, 0.0, -0.2]);
+        }
+        channel.shape(&space, &origin, &[0.5, 0.5, 0.5], &mut out);
+        assert!(out[2] > 0.8 && out[0] < 0.1 * out[2], "{out:?}");
+        // A zero displacement is not a direction.
+        channel.record(&space, &origin, &origin);
+        assert_eq!(channel.held, CHANNEL_MEMORY);
     }
 }

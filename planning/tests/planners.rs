@@ -331,6 +331,64 @@ fn pocketed_goal_escape(label: &str, connect: Connect) {
     }
 }
 
+/// A 6-D slab: below x₀ = 4 only states within 0.03 of 5 in x₂…x₅ are free, so a goal at
+/// x₀ = 0.5 leaves through a channel thin in four directions and long in two.
+fn slab() -> Region {
+    Region {
+        free: |q| q[0] > 4.0 || q[2..].iter().all(|v| (v - 5.0).abs() < 0.03),
+        checks: 0,
+    }
+}
+
+/// In [`slab`], the helper's channel (`Escape::probe`) learns the four thin directions from
+/// its probes and steers its steps along the slab: with the same streams it reaches the goal
+/// in under half the iterations it needs without the channel.
+#[test]
+fn slab_goal_birrt_escape_channel() {
+    let space = JointSpace::new(&[0.0; 6], &[10.0; 6], &[false; 6]).unwrap();
+    let request = PlanRequest::new(
+        vec![8.0, 2.0, 2.0, 8.0, 2.0, 8.0],
+        Goal::Config(vec![0.5, 5.0, 5.0, 5.0, 5.0, 5.0]),
+    );
+    let with = |probe| BiRrt {
+        range: Some(1.0),
+        escape: Some(Escape {
+            probe,
+            ..Escape::default()
+        }),
+        ..BiRrt::default()
+    };
+    let s = solve(
+        "slab/birrt",
+        || with(Escape::default().probe),
+        &space,
+        0.01,
+        &mut slab(),
+        &request,
+        &budget(400_000),
+    );
+    assert!(s.path.states.iter().any(|q| q[0] < 4.0 && q[0] > 1.0));
+    let iterations = |probe: f64| {
+        (0..4u64)
+            .map(|seed| {
+                let mut motion = MotionValidator::new(space.clone(), 0.01);
+                let mut rng = Pcg64Mcg::seed_from_u64(seed);
+                match with(probe).plan(&mut motion, &mut slab(), &request, &budget(400_000), &mut rng) {
+                    Ok(s) => s.stats.iterations,
+                    Err(PlanError::Timeout { stats }) => stats.iterations,
+                    Err(e) => panic!("slab, probe {probe}: {e}"),
+                }
+            })
+            .sum::<u64>()
+    };
+    let (channel, straight) = (iterations(Escape::default().probe), iterations(0.0));
+    println!("slab: {channel} iterations over four seeds with the channel, {straight} without");
+    assert!(
+        2 * channel < straight,
+        "iterations with the channel {channel}, without {straight}"
+    );
+}
+
 #[test]
 fn narrow_passage_lazy_prm() {
     passage("passage/lazy_prm", LazyPrm::default);
@@ -679,6 +737,8 @@ fn bad_input_is_named() {
         (Escape { step: 0.75, ..e }, "step: 0.75"),
         (Escape { join: 1.5, ..e }, "join: 1.5"),
         (Escape { stuck_ratio: 0, ..e }, "stuck_ratio: 0"),
+        (Escape { probe: 1.0, ..e }, "probe: 1.0"),
+        (Escape { probe: -0.1, ..e }, "probe: -0.1"),
     ] {
         let mut birrt = BiRrt {
             escape: Some(escape),

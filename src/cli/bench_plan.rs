@@ -98,6 +98,15 @@ pub struct BenchPlanArgs {
     /// helper tree of short steps), for comparisons with plain balanced RRT-Connect.
     #[arg(long)]
     no_escape: bool,
+    /// BiRRT only: share of the escape helper's turns spent probing short steps to learn the
+    /// pocket's free directions (`Escape::probe`; 0 steers every helper step straight at its
+    /// sample). When absent: the planner's default.
+    #[arg(long)]
+    escape_probe: Option<f64>,
+    /// BiRRT only: share of a stuck tree's turns given to its escape helper (`Escape::share`).
+    /// When absent: the planner's default.
+    #[arg(long)]
+    escape_share: Option<f64>,
     /// BiRRT only: which tree grows along the line joining the trees after an extension:
     /// `other` (the other tree, as OMPL's RRTConnect) or `onward` (the tree that just grew, as
     /// VAMP's). When absent: `other`, which solved more of the Fetch's hardest problems and
@@ -175,7 +184,14 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
             min_radius: radius / 4.0,
             ..DynamicDomain::default()
         }),
-        escape: (!a.no_escape).then(Escape::default),
+        escape: (!a.no_escape).then(|| {
+            let e = Escape::default();
+            Escape {
+                probe: a.escape_probe.unwrap_or(e.probe),
+                share: a.escape_share.unwrap_or(e.share),
+                ..e
+            }
+        }),
         ..BiRrt::default()
     }
 }
@@ -292,8 +308,17 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.dynamic_domain.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--dynamic-domain applies to --planner birrt only");
     }
-    if a.no_escape && a.planner != PlannerKind::Birrt {
-        bail!("--no-escape applies to --planner birrt only");
+    if (a.no_escape || a.escape_probe.is_some() || a.escape_share.is_some()) && a.planner != PlannerKind::Birrt {
+        bail!("--no-escape, --escape-probe and --escape-share apply to --planner birrt only");
+    }
+    if a.escape_probe.is_some_and(|p| !(0.0..1.0).contains(&p)) {
+        bail!("--escape-probe must be in [0, 1)");
+    }
+    if a.escape_share.is_some_and(|s| !(s > 0.0 && s < 1.0)) {
+        bail!("--escape-share must be in (0, 1)");
+    }
+    if a.no_escape && (a.escape_probe.is_some() || a.escape_share.is_some()) {
+        bail!("--escape-probe and --escape-share set the escape that --no-escape turns off");
     }
     if a.connect.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--connect applies to --planner birrt only");
