@@ -264,9 +264,15 @@ struct Channel {
     next: usize,
     /// Sum of the held directions' outer products, `dim × dim`.
     moment: Vec<f64>,
-    /// Scratch: a displacement and its shaped image.
+    /// Scratch: a displacement, its shaped image, and the shaped target.
     delta: Vec<f64>,
     shaped: Vec<f64>,
+    target: Vec<f64>,
+}
+
+/// Euclidean length of a displacement.
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// Free directions a [`Channel`] remembers.
@@ -287,6 +293,7 @@ impl Channel {
             moment: vec![0.0; dim * dim],
             delta: vec![0.0; dim],
             shaped: vec![0.0; dim],
+            target: vec![0.0; dim],
         }
     }
 
@@ -294,13 +301,13 @@ impl Channel {
     fn record<S: Space>(&mut self, space: &S, from: &[f64], to: &[f64]) {
         let d = self.dim;
         space.difference(from, to, &mut self.delta);
-        let norm = self.delta.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !(norm > 0.0 && norm.is_finite()) {
+        let length = norm(&self.delta);
+        if !(length > 0.0 && length.is_finite()) {
             return;
         }
         let slot = &mut self.dirs[self.next * d..][..d];
         for (s, x) in slot.iter_mut().zip(&self.delta) {
-            *s = x / norm;
+            *s = x / length;
         }
         self.next = (self.next + 1) % CHANNEL_MEMORY;
         self.held = (self.held + 1).min(CHANNEL_MEMORY);
@@ -320,10 +327,10 @@ impl Channel {
         self.held >= CHANNEL_READY
     }
 
-    /// Writes into `out` a target as far from `from` as `target` is, in the direction of
-    /// `target`'s displacement multiplied by the channel's shape (its second moment with a
-    /// floor of [`CHANNEL_FLOOR`]), within the bounds.
-    fn shape<S: Space>(&mut self, space: &S, from: &[f64], target: &[f64], out: &mut [f64]) {
+    /// A target as far from `from` as `target` is, in the direction of `target`'s
+    /// displacement multiplied by the channel's shape (its second moment with a floor of
+    /// [`CHANNEL_FLOOR`]), within the bounds.
+    fn shape<S: Space>(&mut self, space: &S, from: &[f64], target: &[f64]) -> &[f64] {
         let d = self.dim;
         space.difference(from, target, &mut self.delta);
         let trace: f64 = (0..d).map(|i| self.moment[i * d + i]).sum();
@@ -332,13 +339,13 @@ impl Channel {
             let row = &self.moment[i * d..][..d];
             self.shaped[i] = row.iter().zip(&self.delta).map(|(m, x)| m * x).sum::<f64>() + floor * self.delta[i];
         }
-        let len = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let scale = len(&self.delta) / len(&self.shaped);
+        let scale = norm(&self.delta) / norm(&self.shaped);
         let scale = if scale.is_finite() { scale } else { 0.0 };
-        for ((o, f), s) in out.iter_mut().zip(from).zip(&self.shaped) {
+        for ((o, f), s) in self.target.iter_mut().zip(from).zip(&self.shaped) {
             *o = f + s * scale;
         }
-        space.enforce_bounds(out);
+        space.enforce_bounds(&mut self.target);
+        &self.target
     }
 }
 
@@ -410,7 +417,6 @@ struct Stepper {
     domain: Option<(f64, f64, f64)>,
     step: Vec<f64>,
     from: Vec<f64>,
-    shaped: Vec<f64>,
 }
 
 impl Stepper {
@@ -457,25 +463,20 @@ impl Stepper {
             }
             return None;
         }
-        let mut shaped = std::mem::take(&mut self.shaped);
         let aim: &[f64] = if helper.channel.ready() {
-            helper
-                .channel
-                .shape(motion.space(), helper.tree.state(near), target, &mut shaped);
-            &shaped
+            helper.channel.shape(motion.space(), helper.tree.state(near), target)
         } else {
             target
         };
-        let mut joined = None;
         if self.try_step(motion, validator, helper.tree.state(near), aim, long) {
             let at = helper.join(near, grown, chain);
-            joined = Some(grown.add(&self.step, Some(at)));
-        } else if self.try_step(motion, validator, helper.tree.state(near), aim, short) {
+            return Some(grown.add(&self.step, Some(at)));
+        }
+        if self.try_step(motion, validator, helper.tree.state(near), aim, short) {
             helper.tree.add(&self.step, Some(near));
             helper.joined.push(None);
         }
-        self.shaped = shaped;
-        joined
+        None
     }
 
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
@@ -611,7 +612,6 @@ impl<S: Space> Planner<S> for BiRrt {
             domain,
             step: vec![0.0; dim],
             from: vec![0.0; dim],
-            shaped: vec![0.0; dim],
         };
         let roots = [1, goals.len()];
         let mut attempts = [0u64; 2];
@@ -720,20 +720,17 @@ mod tests {
             channel.record(&space, &origin, &[a.cos() * 0.1, a.sin() * 0.1, 0.0]);
         }
         assert!(channel.ready());
-        let mut out = [0.0; 3];
-        channel.shape(&space, &origin, &[0.5, 0.5, 0.5], &mut out);
-        let len = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        assert!((len(&out) - len(&[0.5; 3])).abs() < 1e-12, "{out:?}");
+        let out = channel.shape(&space, &origin, &[0.5, 0.5, 0.5]).to_vec();
+        assert!((norm(&out) - norm(&[0.5; 3])).abs() < 1e-12, "{out:?}");
         // The floor leaves z a twentieth or so of what x and y get.
         assert!(out[2] > 0.0 && out[2] < 0.1 * out[0].min(out[1]), "{out:?}");
         // Clamped into the bounds.
-        channel.shape(&space, &[1.9, 0.0, 0.0], &[10.0, 0.0, 0.0], &mut out);
-        assert_eq!(out[0], 2.0);
+        assert_eq!(channel.shape(&space, &[1.9, 0.0, 0.0], &[10.0, 0.0, 0.0])[0], 2.0);
         // Directions along z, recorded past the memory, replace the x-y ones entirely.
         for _ in 0..CHANNEL_MEMORY {
             channel.record(&space, &origin, &[0.0, 0.0, -0.2]);
         }
-        channel.shape(&space, &origin, &[0.5, 0.5, 0.5], &mut out);
+        let out = channel.shape(&space, &origin, &[0.5, 0.5, 0.5]);
         assert!(out[2] > 0.8 && out[0] < 0.1 * out[2], "{out:?}");
         // A zero displacement is not a direction.
         channel.record(&space, &origin, &origin);
