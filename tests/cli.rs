@@ -450,6 +450,25 @@ fn bench_plan_writes_results_json() {
             "{r}"
         );
     }
+    // An iteration limit ends a plan that the time limit would not: the same plan on any
+    // machine, stopped at the same iteration (or solved within it).
+    let (_, v) = bench_json(
+        &[
+            "--only",
+            "table_pick:1",
+            "--iterations",
+            "3",
+            "--time-limit",
+            "60",
+            "--warm-up",
+            "0",
+        ],
+        "iterations.json",
+    );
+    let r = &v["results"][0];
+    let stopped = r["error"].as_str().is_some_and(|e| e.contains("(3 iterations"));
+    let within = r["success"] == true && r["iterations"].as_u64().is_some_and(|n| n <= 3);
+    assert!(stopped || within, "{r}");
     // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
     for (extra, says) in [
         (&[][..], "RRT step 6 rad, goal zone 0.5"),
@@ -484,6 +503,7 @@ fn bench_plan_writes_results_json() {
             "apply to --planner birrt only",
         ),
         (&["--escape-probe", "1"][..], "--escape-probe must be in [0, 1)"),
+        (&["--iterations", "0"][..], "--iterations must be positive"),
         (&["--escape-share", "0"][..], "--escape-share must be in (0, 1)"),
         (
             &["--no-escape", "--escape-probe", "0.5"][..],

@@ -10,8 +10,10 @@
 //! takes about 5 µs with k-d trees and 38 µs with vantage-point trees; with one joint
 //! continuous, 8 µs). The k-d trees keep each node's bounding box, which prunes queries far
 //! from every state: 1,000 states in a pocket answer a sample of the whole space in about
-//! 3 µs, against 7 µs with the cells' split planes alone. All give the exact answer, ties
-//! broken by id.
+//! 3 µs, against 7 µs with the cells' split planes alone. Trees of up to a few hundred
+//! states, and trees of up to 2,048 far from the query, are scanned instead of descended: an
+//! f32 copy of their weighted states, eight per step, filters with a bound widened past its
+//! rounding, and the space's distance decides. All give the exact answer, ties broken by id.
 //! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
 //! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
 //! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`
@@ -22,6 +24,7 @@ use std::collections::BinaryHeap;
 use std::f64::consts::{PI, TAU};
 
 use hearth_kinematics::wrap_angle;
+use wide::f32x8;
 
 use crate::space::Space;
 
@@ -35,6 +38,15 @@ const STACK: usize = 64;
 const SLACK: f64 = 1e-9;
 /// Spaces of at most this many coordinates with a weighted Euclidean metric get k-d trees.
 const KD_MAX_DIM: usize = 32;
+/// k-d trees of at most this many states keep an f32 copy of their states and are scanned,
+/// eight states at a time, instead of descended when the query is far from them
+/// ([`KdTree::scanned`]): a tree stuck in a pocket is about equally far from every sample of
+/// the whole space, so descent would visit most of its leaves anyway.
+const SCAN_MAX: usize = 2048;
+/// k-d trees of at most this many states are scanned whatever the query.
+const SCAN_ALWAYS: usize = 256;
+/// States a scanned tree tests per step (the lanes of an `f32x8`).
+const LANES: usize = 8;
 
 /// An exact nearest-neighbour index over states of one [`Space`] (ids are insertion indices).
 ///
@@ -517,6 +529,18 @@ struct KdTree {
     /// tree stuck in a pocket) is pruned by the boxes' distance, where the cells' split planes
     /// alone leave most leaves to visit.
     boxes: Vec<f64>,
+    /// For a tree of at most [`SCAN_MAX`] states: `points` times their weights in f32, in
+    /// blocks of [`LANES`] states (`dim` rows of [`LANES`] values per block, the last block
+    /// padded with NaN, which no filter passes); empty for a tree searched by descent.
+    lanes: Vec<f32>,
+    /// Per coordinate of a scanned tree: its weighted period (`periods` times the weight) in
+    /// f32, infinite for a coordinate that is no angle.
+    lane_periods: Vec<f32>,
+    /// Largest weighted magnitude of a coordinate in `points` or a period (bounds the f32
+    /// rounding of `lanes`).
+    reach: f64,
+    /// The root box's weighted squared diagonal.
+    diagonal2: f64,
 }
 
 impl KdTree {
@@ -532,6 +556,10 @@ impl KdTree {
             periods: wraps.iter().map(|&w| if w { TAU } else { f64::INFINITY }).collect(),
             wraps,
             boxes: Vec::new(),
+            lanes: Vec::new(),
+            lane_periods: Vec::new(),
+            reach: 0.0,
+            diagonal2: 0.0,
         };
         tree.build_node(states, dim, &mut ids);
         for k in 0..tree.ids.len() {
@@ -542,7 +570,48 @@ impl KdTree {
             }
         }
         tree.build_boxes(dim);
+        if tree.ids.len() <= SCAN_MAX {
+            tree.build_lanes(dim);
+        }
         tree
+    }
+
+    /// Fills `lanes`, `lane_periods`, `reach` and `diagonal2` (leaves `lanes` empty when the
+    /// weighted coordinates are too large for f32 to bound their rounding).
+    fn build_lanes(&mut self, dim: usize) {
+        let (lo, hi) = self.boxes[..2 * dim].split_at(dim);
+        self.diagonal2 = lo
+            .iter()
+            .zip(hi)
+            .zip(&self.weights)
+            .map(|((l, h), w)| (w * (h - l)).powi(2))
+            .sum();
+        let mut reach = 0.0f64;
+        for p in self.points.chunks_exact(dim) {
+            for (x, w) in p.iter().zip(&self.weights) {
+                reach = reach.max((w * x).abs());
+            }
+        }
+        for (axis, w) in self.weights.iter().enumerate() {
+            let period = self.periods.get(axis).copied().unwrap_or(f64::INFINITY);
+            if period.is_finite() {
+                reach = reach.max(w * period);
+            }
+            self.lane_periods.push((w * period) as f32);
+        }
+        if reach.is_nan() || reach >= 1e6 {
+            self.lane_periods.clear();
+            return;
+        }
+        self.reach = reach;
+        let blocks = self.ids.len().div_ceil(LANES);
+        self.lanes = vec![f32::NAN; blocks * dim * LANES];
+        for (k, p) in self.points.chunks_exact(dim).enumerate() {
+            let block = &mut self.lanes[(k / LANES) * dim * LANES..][..dim * LANES];
+            for (axis, (&x, &w)) in p.iter().zip(&self.weights).enumerate() {
+                block[axis * LANES + k % LANES] = (w * x) as f32;
+            }
+        }
     }
 
     /// Fills `boxes`: children come after their parent in `nodes`, so one backward pass sees
@@ -662,6 +731,9 @@ impl KdTree {
     /// Offers `c` the live states of this tree that may be within its radius of `q`.
     fn search<S: Space, C: Collector>(&self, space: &S, index: &NearestNeighbors, q: &[f64], c: &mut C) {
         if self.wraps.is_empty() {
+            if self.scanned(|| self.far::<false>(q)) {
+                return self.scan::<S, C, false>(space, index, q, q, c);
+            }
             let mut search = KdSearch {
                 tree: self,
                 space,
@@ -677,6 +749,9 @@ impl KdTree {
                 *w = if wraps { wrap_angle(x) } else { x };
             }
             let wrapped = &wrapped[..q.len()];
+            if self.scanned(|| self.far::<true>(wrapped)) {
+                return self.scan::<S, C, true>(space, index, q, wrapped, c);
+            }
             let mut search = KdSearch {
                 tree: self,
                 space,
@@ -686,6 +761,90 @@ impl KdTree {
             };
             let root2 = self.box_distance2::<true>(0, wrapped);
             search.visit::<C, true>(0, 0.0, root2, &mut [0.0; KD_MAX_DIM], c);
+        }
+    }
+
+    /// Whether to scan this tree rather than descend it: a small tree always (a scan of a few
+    /// hundred states costs less than descent's bookkeeping), a larger one with `lanes` when
+    /// the query is [`KdTree::far`] from it.
+    #[inline]
+    fn scanned(&self, far: impl FnOnce() -> bool) -> bool {
+        !self.lanes.is_empty() && (self.ids.len() <= SCAN_ALWAYS || far())
+    }
+
+    /// Whether `q` (angles wrapped) lies farther from the root's box than half the box's
+    /// diagonal (weighted): there every state is about equally far, and descent would visit
+    /// most leaves.
+    #[inline]
+    fn far<const WRAP: bool>(&self, wrapped: &[f64]) -> bool {
+        4.0 * self.box_distance2::<WRAP>(0, wrapped) >= self.diagonal2
+    }
+
+    /// [`KdTree::search`] of a tree with `lanes`: every state's weighted squared distance in
+    /// f32, eight states per step, as a filter that passes every state the leaves' own f64
+    /// filter would pass (its bound is widened by more than the f32 rounding of the states,
+    /// the query and the sums can move a distance); the space's own distance decides, as in a
+    /// leaf, so the answers are the descent's to the last bit.
+    fn scan<S: Space, C: Collector, const WRAP: bool>(
+        &self,
+        space: &S,
+        index: &NearestNeighbors,
+        q: &[f64],
+        wrapped: &[f64],
+        c: &mut C,
+    ) {
+        let dim = self.weights.len();
+        let mut query = [0.0f32; KD_MAX_DIM];
+        let mut reach = self.reach;
+        for ((out, &x), &w) in query.iter_mut().zip(wrapped).zip(&self.weights) {
+            reach = reach.max((w * x).abs());
+            *out = (w * x) as f32;
+        }
+        // How far f32 rounding can move a weighted distance: per coordinate a few units in
+        // the last place of the largest weighted magnitude (state, query, period), over every
+        // coordinate; 2⁻¹⁹ is several times what the roundings can add up to. (A query too
+        // large for that bound sends every state to the space's distance.)
+        let slop = if reach < 1e6 {
+            (dim as f64).sqrt() * reach * 2f64.powi(-19) + 1e-12
+        } else {
+            f64::INFINITY
+        };
+        // Blocks go four at a time with one sum each, so that the sums' additions overlap.
+        let step = dim * LANES;
+        for (group, lanes) in self.lanes.chunks(4 * step).enumerate() {
+            let mut d2 = [f32x8::ZERO; 4];
+            let blocks = lanes.len() / step;
+            for (axis, (&x, &period)) in query.iter().zip(&self.lane_periods).enumerate() {
+                let (x, period) = (f32x8::splat(x), f32x8::splat(period));
+                for (b, sum) in d2.iter_mut().enumerate().take(blocks) {
+                    let at = b * step + axis * LANES;
+                    let mut lane = [0.0f32; LANES];
+                    lane.copy_from_slice(&lanes[at..at + LANES]);
+                    let mut d = (x - f32x8::new(lane)).abs();
+                    if WRAP {
+                        d = d.min(period - d);
+                    }
+                    *sum += d * d;
+                }
+            }
+            for (b, sum) in d2.iter().enumerate().take(blocks) {
+                let r = c.radius() + SLACK + slop;
+                let bound = r * r * (1.0 + 1e-5);
+                let bound = if bound < f64::from(f32::MAX) {
+                    bound as f32
+                } else {
+                    f32::INFINITY
+                };
+                let mut pass = sum.simd_le(f32x8::splat(bound)).to_bitmask();
+                while pass != 0 {
+                    let k = (group * 4 + b) * LANES + pass.trailing_zeros() as usize;
+                    pass &= pass - 1;
+                    let Some(&id) = self.ids.get(k) else { break };
+                    if !index.is_removed(id as usize) {
+                        c.offer(space.distance(q, index.state(id as usize)), id);
+                    }
+                }
+            }
         }
     }
 }

@@ -149,6 +149,43 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// States on a shell around the query, far from the origin (coordinates near ±40, one of
+    /// them an angle), whose distances differ by parts in 10¹⁰: far below what f32 resolves,
+    /// so every filter that rounds must let the exact distance decide.
+    #[test]
+    fn near_ties_far_from_the_origin(seed in any::<u64>(), n in 1usize..1200, k in 1usize..6) {
+        let space = JointSpace::new(&[-50.0, -50.0, -50.0, 0.0], &[50.0, 50.0, 50.0, 0.0], &[false, false, false, true])
+            .unwrap()
+            .with_weights(&[1.0, 0.5, 2.0, 0.8])
+            .unwrap();
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let q = [40.0, -39.0, 38.5, 3.1];
+        let mut nn = NearestNeighbors::new(4);
+        let mut states = Vec::new();
+        for i in 0..n {
+            // A random direction scaled to weighted length 1 + i·1e-10 (a shuffled order).
+            let mut d: [f64; 4] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            let w = [1.0, 0.5, 2.0, 0.8];
+            let len = d.iter().zip(&w).map(|(x, w)| (x * w).powi(2)).sum::<f64>().sqrt();
+            let r = 1.0 + ((i * 7919) % n) as f64 * 1e-10;
+            for x in &mut d {
+                *x *= r / len;
+            }
+            let s: Vec<f64> = q.iter().zip(&d).map(|(a, b)| a + b).collect();
+            nn.insert(&s);
+            states.push(s);
+        }
+        let mut by_distance: Vec<(f64, usize)> = states.iter().enumerate().map(|(i, s)| (space.distance(&q, s), i)).collect();
+        by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        prop_assert_eq!(nn.nearest(&space, &q), Some(by_distance[0].1));
+        let expected: Vec<usize> = by_distance.iter().take(k).map(|e| e.1).collect();
+        prop_assert_eq!(nn.k_nearest(&space, &q, k), expected);
+    }
+}
+
 #[test]
 fn wraps_through_pi() {
     let space = se2_space();

@@ -76,6 +76,11 @@ pub struct BenchPlanArgs {
     /// Time limit per plan, in seconds.
     #[arg(long, default_value_t = 1.0)]
     time_limit: f64,
+    /// Iteration limit per plan as well (whichever limit comes first). With a time limit
+    /// long enough never to end a plan first, every plan is the same on any machine, so two
+    /// builds or two machines can be timed on the same plans.
+    #[arg(long)]
+    iterations: Option<u64>,
     /// Edge-check resolution while planning (joint-space distance between checked states,
     /// rad). The default, 1/32 rad, is VAMP's, so both check edges equally densely.
     #[arg(long, default_value_t = 1.0 / 32.0)]
@@ -296,6 +301,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     {
         bail!("--time-limit, --resolution and --fine-resolution must be positive");
     }
+    if a.iterations == Some(0) {
+        bail!("--iterations must be positive");
+    }
     if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
         bail!("--range must be positive");
     }
@@ -420,7 +428,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let goals: Vec<Vec<f64>> = problem.goals.iter().map(|g| wrap_continuous(&rs.chain, g)).collect();
                 let mut motion = MotionValidator::new(space.clone(), a.resolution);
                 let request = PlanRequest::new(start, Goal::AnyOf(goals));
-                let budget = Budget::time(a.time_limit);
+                let budget = match a.iterations {
+                    Some(n) => Budget::time(a.time_limit).with_iterations(n),
+                    None => Budget::time(a.time_limit),
+                };
                 let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(plan_seed(a.seed, problem.id, rep));
                 let before = v.checks();
                 let outcome = match a.planner {
