@@ -19,7 +19,7 @@ use crate::validity::StateValidator;
 /// ([`BiRrt::balance`], as in VAMP's RRT-Connect) and the pocket escape ([`Escape`]: a helper
 /// tree of short steps for a tree that barely grows) are on by default; dynamic-domain
 /// sampling ([`DynamicDomain`]) is available but off, because it lowered success on the
-/// MotionBenchMaker problems (`docs/benchmarks.md`). [`BiRrt::plain`] is the textbook
+/// MotionBenchMaker problems (`docs/planning-log.md`). [`BiRrt::plain`] is the textbook
 /// algorithm.
 ///
 /// One iteration is one sample. Settings are serde-derivable.
@@ -56,7 +56,7 @@ pub struct BiRrt {
     /// skills were validated with. OMPL's default, 0.2 × the extent, made each extension check
     /// up to ~120 states on MotionBenchMaker problems and cost success. Longer steps suit some
     /// problem sets: `hearth bench plan` takes 0.65 rad for the Panda and 1.2 rad for the
-    /// Fetch (`docs/benchmarks.md`).
+    /// Fetch (`docs/planning-log.md`).
     pub range: Option<f64>,
     /// Dynamic-domain sampling (Yershova, Jaillet, Siméon & LaValle, ICRA 2005): a state whose
     /// extension failed only accepts samples within its domain radius afterwards, so states
@@ -87,7 +87,7 @@ pub enum Connect {
     /// The other tree grows from its state nearest to the new state towards it (the textbook
     /// algorithm; OMPL's `RRTConnect`). The faster choice on open problems: the Panda's
     /// MotionBenchMaker box problems take 0.59 ms against 0.77 ms with [`Connect::Onward`]
-    /// (`docs/benchmarks.md`).
+    /// (`docs/planning-log.md`).
     #[default]
     Other,
     /// The tree that just grew goes on from its new state towards the other tree's state
@@ -96,7 +96,7 @@ pub enum Connect {
     /// MotionBenchMaker problems it does not pay: the hardest Fetch problems (goals wedged
     /// between shelf boards or cage bars) are solved in 54 of 176 plans within 1 s against 74
     /// with [`Connect::Other`], and the Panda's open problems are planned more slowly
-    /// (`docs/benchmarks.md`).
+    /// (`docs/planning-log.md`).
     Onward,
 }
 
@@ -251,7 +251,7 @@ struct Helper {
 /// 0.06–0.27 for the other six. Steering towards a sample through that second moment (the
 /// displacement multiplied by it, so the thin directions are squashed) makes 6–17× more
 /// 0.3 rad steps from those goals free than steering straight at the sample
-/// (`docs/benchmarks.md`, fifteenth round). This is principal-component analysis of the local free space, as in
+/// (`docs/planning-log.md`, fifteenth round). This is principal-component analysis of the local free space, as in
 /// Dalibard & Laumond's PCA-guided RRT ("Control of probabilistic diffusion in motion
 /// planning", WAFR 2008), learnt here from short probes rather than from the tree's states. The memory is short ([`CHANNEL_MEMORY`] directions), so the shape follows the
 /// helper's frontier as the channel turns.

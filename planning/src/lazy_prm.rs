@@ -38,7 +38,7 @@ pub struct LazyPrmSettings {
     /// each search expands fewer vertices.
     /// A search runs after every candidate that fails its checks, so on large roadmaps the
     /// searches are a large share of the time; 1.5 solved 1–3 % more MotionBenchMaker
-    /// bookshelf problems within 1 s than the exact search (`docs/benchmarks.md`).
+    /// bookshelf problems within 1 s than the exact search (`docs/planning-log.md`).
     pub search_weight: f64,
     /// Share of each batch spent growing a *wedged* query end (default 0.9; 0 turns it off):
     /// when no candidate path is left and the start's or the goals' part of the roadmap holds
@@ -82,7 +82,7 @@ impl Default for LazyPrmSettings {
 /// state check costs about a microsecond here, far less than the neighbour query and the
 /// repeated graph searches an invalid vertex would cost on the roadmap (on MotionBenchMaker's
 /// Panda problems this raised success within 1 s from 91.7 to 97.6 % on table_pick and from
-/// 73.7 to 92.6 % on bookshelf_thin, `docs/benchmarks.md`).
+/// 73.7 to 92.6 % on bookshelf_thin, `docs/planning-log.md`).
 ///
 /// The roadmap (and what was found valid on it) persists across [`Planner::plan`] calls, so
 /// later queries in the same scene are cheaper. **It assumes a static scene and the same space

@@ -53,7 +53,7 @@ pub struct Rrt {
     /// (a grasp on a shelf) gets states that can see it from close by. 0 turns it off (OMPL);
     /// with the default, 0.1, the median planning time on the MotionBenchMaker Panda bookshelf
     /// problems fell 2.3–2.9× (table_pick 1.9×; box and table_under_pick unchanged), with as
-    /// many successes (`docs/benchmarks.md`). `goal_bias + goal_zone` must not exceed 1.
+    /// many successes (`docs/planning-log.md`). `goal_bias + goal_zone` must not exceed 1.
     pub goal_zone: f64,
     /// Radius of the goal zone as a fraction of `range`.
     pub goal_zone_radius: f64,

@@ -92,11 +92,11 @@ pub struct BenchPlanArgs {
     /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch, 0.65 rad
     /// for the Panda and its own default otherwise (0.02 × the space's extent); RRT takes 6 rad
     /// for the Panda and the Fetch and its default otherwise; LazyPRM its default (0.2 × the
-    /// extent, as OMPL). See `docs/benchmarks.md`.
+    /// extent, as OMPL). See `docs/planning-log.md`.
     #[arg(long)]
     range: Option<f64>,
     /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
-    /// minimum radius is a quarter of it). Off by default: see `docs/benchmarks.md`.
+    /// minimum radius is a quarter of it). Off by default: see `docs/planning-log.md`.
     #[arg(long)]
     dynamic_domain: Option<f64>,
     /// BiRRT only: turn off the pocket escape (`Escape`: a tree that almost never grows gets a
@@ -115,7 +115,7 @@ pub struct BenchPlanArgs {
     /// BiRRT only: which tree grows along the line joining the trees after an extension:
     /// `other` (the other tree, as OMPL's RRTConnect) or `onward` (the tree that just grew, as
     /// VAMP's). When absent: `other`, which solved more of the Fetch's hardest problems and
-    /// planned the Panda's open ones faster. See `docs/benchmarks.md`.
+    /// planned the Panda's open ones faster. See `docs/planning-log.md`.
     #[arg(long, value_enum)]
     connect: Option<ConnectArg>,
     /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
@@ -126,7 +126,7 @@ pub struct BenchPlanArgs {
     /// Random configurations per robot whose self-collision certificates are computed before
     /// any plan is timed (`RobotValidity::warm_pair_tables`): plans then run as they do in a
     /// process that has planned before. 0 times every plan from a cold process, as the first
-    /// plans of a program run. See `docs/benchmarks.md`.
+    /// plans of a program run. See `docs/planning-log.md`.
     #[arg(long, default_value_t = 1_000_000)]
     warm_up: usize,
     /// Path post-processing.
@@ -169,7 +169,7 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
 }
 
 /// BiRRT for a robot as the command's arguments set it up. `--range` and `--connect` where
-/// given, else this benchmark's settings, measured on MotionBenchMaker (`docs/benchmarks.md`):
+/// given, else this benchmark's settings, measured on MotionBenchMaker (`docs/planning-log.md`):
 /// the Fetch's torso + arm problems are solved more often with a 1.2 rad step than with the
 /// planner's 0.26 rad default (94.0 % against 82.8 % in 1 s); the Panda's are solved fastest
 /// with 0.65 rad. Both take the planner's connection, [`Connect::Other`]: with
@@ -202,7 +202,7 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
 }
 
 /// RRT for a robot: `range` and `goal_zone` where given, else this benchmark's settings,
-/// measured on MotionBenchMaker (`docs/benchmarks.md`): for the Panda and the Fetch a step
+/// measured on MotionBenchMaker (`docs/planning-log.md`): for the Panda and the Fetch a step
 /// bounded only by the edge check (6 rad) and half the samples drawn near a goal solve more
 /// problems than the planner's defaults (OMPL's step of 0.2 × the extent, a goal zone of 0.1),
 /// which other robots take.
