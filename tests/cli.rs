@@ -422,11 +422,38 @@ fn bench_plan_writes_results_json() {
     let p1 = results.iter().find(|r| r["id"] == 1).unwrap();
     assert!(p1.get("success").is_some() || p1.get("skipped").is_some(), "{p1}");
     assert!(v["summary"]["table_pick"]["plans"].as_u64() == Some(2));
+    // One robot: the families and `all`, with the count of solved and attempted plans.
+    let all = &v["summary"]["all"];
+    assert_eq!(
+        (all["plans"].as_u64(), all["attempted"].as_u64()),
+        (Some(2), Some(1)),
+        "{all}"
+    );
+    assert!(results.iter().all(|r| r["robot"] == "panda"), "{results:?}");
     assert!(
         v["summary"]["table_pick"]["smoothing_fell_back"].is_u64(),
         "{}",
         v["summary"]
     );
+    // Two robots' problem sets in one run: their families share a name, so the summary keys
+    // name the robot; the folder's `joints.json` (the Panda's) is not applied to the Fetch.
+    let fetch = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/fetch_table_pick.json");
+    let (err, v) = bench_json(
+        &["--problems", fetch, "--warm-up", "0", "--shortcut", "none"],
+        "both.json",
+    );
+    assert!(err.contains("describes robot `panda`, not used"), "{err}");
+    for key in ["panda/table_pick", "fetch/table_pick", "panda/all", "fetch/all"] {
+        assert!(v["summary"][key]["plans"].is_u64(), "{key}: {}", v["summary"]);
+    }
+    assert!(v["summary"].get("table_pick").is_none(), "{}", v["summary"]);
+    let robots: Vec<_> = v["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["robot"].clone())
+        .collect();
+    assert_eq!(robots, ["panda", "panda", "fetch"]);
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
     let ids: Vec<_> = v["results"]

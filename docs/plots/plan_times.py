@@ -2,7 +2,7 @@
 """Box plots of planning times per family and planner from `hearth bench plan --json` files.
 
 Usage: python3 docs/plots/plan_times.py OUT.png RESULTS.json [RESULTS.json ...]
-Each JSON file holds the results of one robot and planner; the figure has one panel per
+Each JSON file holds the results of one planner (rows name their robot); the figure has one panel per
 robot, one box per (family, planner), successful plans only, log time axis.
 Needs matplotlib (a documentation tool, not a build dependency).
 """
@@ -19,9 +19,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 def load(paths):
     data = defaultdict(lambda: defaultdict(list))  # robot -> (family, planner) -> times ms
     for p in paths:
-        robot = "fetch" if "fetch" in p else "panda"
+        # Rows name their robot; files written before they did are told apart by name.
+        fallback = "fetch" if "fetch" in p else "panda"
         for r in json.load(open(p))["results"]:
             if r.get("success"):
+                robot = r.get("robot", fallback)
                 data[robot][(r["family"], r["planner"])].append(1e3 * r["plan_time_s"])
     return data
 

@@ -243,8 +243,18 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
     );
     let mut reference = model.neutral_configuration();
     let mut note = String::new();
-    if let Some(path) = joints_file {
-        let info = JointsInfo::load(path)?;
+    let info = joints_file
+        .map(|path| JointsInfo::load(path).map(|i| (path, i)))
+        .transpose()?;
+    if let Some((path, info)) = &info
+        && info.robot != robot
+    {
+        note.push_str(&format!(
+            "{} describes robot `{}`, not used",
+            path.display(),
+            info.robot
+        ));
+    } else if let Some((_, info)) = info {
         for [a, b] in &info.notes.self_collision_allowed_pairs {
             if let (Ok(a), Ok(b)) = (model.link_index(a), model.link_index(b)) {
                 matrix.disable(a, b, DisabledReason::Never);
@@ -364,6 +374,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     let mut setups: BTreeMap<String, RobotSetup> = BTreeMap::new();
     let mut results = Vec::new();
     let mut done = 0usize;
+    let progress = Progress::new(total);
     for (set, joints) in &sets {
         if !setups.contains_key(&set.robot) {
             let s = setup(&set.robot, &set.joint_names, joints.as_deref())
@@ -408,10 +419,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         for problem in &set.problems {
             for rep in 0..a.repeat {
                 done += 1;
-                if done.is_multiple_of(10) || done == total {
-                    eprint!("\r{done}/{total} plans");
-                }
-                let mut row = json!({"family": set.family, "id": problem.id, "planner": format!("{:?}", a.planner).to_lowercase(), "repeat": rep});
+                progress.show(done);
+                let mut row = json!({"robot": set.robot, "family": set.family, "id": problem.id, "planner": format!("{:?}", a.planner).to_lowercase(), "repeat": rep});
                 if !problem.valid {
                     row["skipped"] = json!("marked invalid in the problem set");
                     results.push(row);
@@ -522,59 +531,46 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             }
         }
     }
-    eprintln!();
-    // Summary per family.
-    let mut families: BTreeMap<String, Vec<&Value>> = BTreeMap::new();
+    progress.finish();
+    // Summary per family, then over all families; labelled `robot/family` (and `robot/all`)
+    // when the run covers several robots, as two robots' families can share a name.
+    let robots: std::collections::BTreeSet<&str> = results.iter().filter_map(|r| r["robot"].as_str()).collect();
+    let label = |robot: &str, family: &str| {
+        if robots.len() > 1 {
+            format!("{robot}/{family}")
+        } else {
+            family.to_owned()
+        }
+    };
+    let mut groups: BTreeMap<(String, String), Vec<&Value>> = BTreeMap::new();
     for r in &results {
-        families
-            .entry(r["family"].as_str().unwrap_or("?").to_owned())
-            .or_default()
-            .push(r);
+        let robot = r["robot"].as_str().unwrap_or("?").to_owned();
+        let family = r["family"].as_str().unwrap_or("?").to_owned();
+        groups.entry((robot, family)).or_default().push(r);
     }
     println!(
-        "{:<18} {:>6} {:>7} {:>9} {:>11} {:>11} {:>9} {:>11} {:>9} {:>9}",
-        "family", "plans", "skipped", "success", "median ms", "p95 ms", "length", "shortcut ms", "motion s", "checks"
+        "{:<22} {:>6} {:>7} {:>9} {:>8} {:>11} {:>11} {:>9} {:>11} {:>9} {:>9}",
+        "family",
+        "plans",
+        "skipped",
+        "solved",
+        "success",
+        "median ms",
+        "p95 ms",
+        "length",
+        "shortcut ms",
+        "motion s",
+        "checks"
     );
     let mut summary = serde_json::Map::new();
-    for (family, rows) in &families {
-        let attempted: Vec<&&Value> = rows.iter().filter(|r| r.get("skipped").is_none()).collect();
-        let ok: Vec<&&Value> = attempted
-            .iter()
-            .filter(|r| r["success"] == json!(true))
-            .copied()
-            .collect();
-        // One numeric field of the successful rows, scaled.
-        let column = |key: &str, scale: f64| -> Vec<f64> {
-            ok.iter().filter_map(|r| r[key].as_f64()).map(|v| v * scale).collect()
-        };
-        let times = column("plan_time_s", 1e3);
-        let lengths = column("path_length", 1.0);
-        let checks = column("checks", 1.0);
-        let shortcut = column("shortcut_time_s", 1e3);
-        let durations = column("duration_s", 1.0);
-        let rate = ok.len() as f64 / attempted.len().max(1) as f64;
-        let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
-        println!(
-            "{:<18} {:>6} {:>7} {:>8.1}% {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",
-            family,
-            rows.len(),
-            rows.len() - attempted.len(),
-            100.0 * rate,
-            percentile(&times, 0.5),
-            percentile(&times, 0.95),
-            percentile(&lengths, 0.5),
-            percentile(&shortcut, 0.5),
-            percentile(&durations, 0.5),
-            percentile(&checks, 0.5)
-        );
-        summary.insert(
-            family.clone(),
-            json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "success_rate": rate,
-                   "plan_time_ms_median": percentile(&times, 0.5), "plan_time_ms_p95": percentile(&times, 0.95),
-                   "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5),
-                   "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5),
-                   "smoothing_fell_back": fell_back}),
-        );
+    for ((robot, family), rows) in &groups {
+        let name = label(robot, family);
+        summary.insert(name.clone(), summarize(&name, rows));
+    }
+    for robot in &robots {
+        let rows: Vec<&Value> = results.iter().filter(|r| r["robot"].as_str() == Some(*robot)).collect();
+        let name = label(robot, "all");
+        summary.insert(name.clone(), summarize(&name, &rows));
     }
     if let Some(path) = a.json {
         let out = json!({"results": results, "summary": summary});
@@ -582,6 +578,80 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// One summary row (printed) and its JSON entry, for the plans `rows` of one group.
+fn summarize(name: &str, rows: &[&Value]) -> Value {
+    let attempted: Vec<&Value> = rows.iter().copied().filter(|r| r.get("skipped").is_none()).collect();
+    let ok: Vec<&Value> = attempted
+        .iter()
+        .copied()
+        .filter(|r| r["success"] == json!(true))
+        .collect();
+    // One numeric field of the successful rows, scaled.
+    let column =
+        |key: &str, scale: f64| -> Vec<f64> { ok.iter().filter_map(|r| r[key].as_f64()).map(|v| v * scale).collect() };
+    let times = column("plan_time_s", 1e3);
+    let lengths = column("path_length", 1.0);
+    let checks = column("checks", 1.0);
+    let shortcut = column("shortcut_time_s", 1e3);
+    let durations = column("duration_s", 1.0);
+    // No rate when nothing was attempted (every plan skipped).
+    let rate = (!attempted.is_empty()).then(|| ok.len() as f64 / attempted.len() as f64);
+    let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
+    println!(
+        "{:<22} {:>6} {:>7} {:>9} {:>8} {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",
+        name,
+        rows.len(),
+        rows.len() - attempted.len(),
+        format!("{}/{}", ok.len(), attempted.len()),
+        rate.map_or("-".to_owned(), |r| format!("{:.1}%", 100.0 * r)),
+        percentile(&times, 0.5),
+        percentile(&times, 0.95),
+        percentile(&lengths, 0.5),
+        percentile(&shortcut, 0.5),
+        percentile(&durations, 0.5),
+        percentile(&checks, 0.5)
+    );
+    json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "solved": ok.len(), "attempted": attempted.len(),
+           "success_rate": rate,
+           "plan_time_ms_median": percentile(&times, 0.5), "plan_time_ms_p95": percentile(&times, 0.95),
+           "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5),
+           "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5),
+           "smoothing_fell_back": fell_back})
+}
+
+/// Progress on stderr: one line rewritten in place on a terminal; otherwise (a log file, a
+/// pipe) a line at every tenth of the run, so logs stay readable.
+struct Progress {
+    total: usize,
+    terminal: bool,
+}
+
+impl Progress {
+    fn new(total: usize) -> Self {
+        use std::io::IsTerminal;
+        Self {
+            total,
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn show(&self, done: usize) {
+        if self.terminal {
+            if done.is_multiple_of(10) || done == self.total {
+                eprint!("\r{done}/{} plans", self.total);
+            }
+        } else if done == self.total || (done * 10 / self.total.max(1)) > ((done - 1) * 10 / self.total.max(1)) {
+            eprintln!("{done}/{} plans", self.total);
+        }
+    }
+
+    fn finish(&self) {
+        if self.terminal {
+            eprintln!();
+        }
+    }
 }
 
 #[cfg(test)]
