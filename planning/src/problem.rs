@@ -39,6 +39,22 @@ use crate::obstacles::{Obstacle, ParryScene};
 /// How far a quaternion's norm may be from 1 before it is rejected.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 
+/// Largest magnitude of an obstacle's coordinate or size, in metres (1,000 km). Obstacles become
+/// parry shapes in f32, whose range ends near 3.4 × 10³⁸: a centre beyond it would give a scene
+/// without finite bounds. This limit is far beyond any real scene and far inside f32's range,
+/// so a centre plus a size always stays finite.
+///
+/// ```
+/// use hearth_planning::problem::{Defect, ProblemSet, MAX_EXTENT};
+/// let set = r#"{"robot": "toy", "family": "f", "joint_names": ["j"], "problems": [{"id": 1,
+///   "obstacles": [{"kind": "sphere", "center": [2e6, 0, 0], "radius": 1}], "start": [0], "goals": [[1]]}]}"#;
+/// let e = ProblemSet::from_json_str(set).unwrap_err();
+/// assert_eq!(e.field(), Some("obstacles[0].center[0]"));
+/// assert_eq!(e.defect(), Some(&Defect::TooLarge(2e6)));
+/// assert!(2e6 > MAX_EXTENT);
+/// ```
+pub const MAX_EXTENT: f64 = 1.0e6;
+
 /// The file name in a problem folder that holds [`JointsInfo`], skipped by [`load_dir`].
 pub const JOINTS_FILE: &str = "joints.json";
 
@@ -71,6 +87,9 @@ pub enum Defect {
     /// A list that must not be empty is empty.
     #[error("is empty")]
     Empty,
+    /// An obstacle coordinate or size beyond ±[`MAX_EXTENT`].
+    #[error("is {0}, beyond ±{max} m", max = MAX_EXTENT)]
+    TooLarge(f64),
     /// A lower limit above the upper one.
     #[error("lower limit {lower} is above upper limit {upper}")]
     InvertedLimits {
@@ -686,13 +705,25 @@ impl Ctx<'_> {
         if v < 0.0 {
             return Err(self.err(field, Defect::Negative(v)));
         }
+        if v > MAX_EXTENT {
+            return Err(self.err(field, Defect::TooLarge(v)));
+        }
         Ok(v)
     }
 
     fn sizes(&self, field: &str, v: Option<&Vec<f64>>) -> Result<[f64; 3], ProblemError> {
-        let a = self.array::<3>(field, v)?;
+        let a = self.point(field, v)?;
         match a.iter().position(|&x| x < 0.0) {
             Some(i) => Err(self.err(format!("{field}[{i}]"), Defect::Negative(a[i]))),
+            None => Ok(a),
+        }
+    }
+
+    /// Three finite values within ±[`MAX_EXTENT`] (a centre or half-extents).
+    fn point(&self, field: &str, v: Option<&Vec<f64>>) -> Result<[f64; 3], ProblemError> {
+        let a = self.array::<3>(field, v)?;
+        match a.iter().position(|x| x.abs() > MAX_EXTENT) {
+            Some(i) => Err(self.err(format!("{field}[{i}]"), Defect::TooLarge(a[i]))),
             None => Ok(a),
         }
     }
@@ -710,7 +741,7 @@ impl Ctx<'_> {
 impl RawObstacle {
     fn convert(self, ctx: &Ctx<'_>, i: usize) -> Result<ObstacleSpec, ProblemError> {
         let f = |name: &str| format!("obstacles[{i}].{name}");
-        let center = ctx.array::<3>(&f("center"), self.center.as_ref())?;
+        let center = ctx.point(&f("center"), self.center.as_ref())?;
         let name = self.name;
         Ok(match self.kind.as_str() {
             "box" => ObstacleSpec::Box {
