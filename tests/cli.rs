@@ -447,22 +447,19 @@ fn bench_plan_writes_results_json() {
         assert!(v["summary"][key]["plans"].is_u64(), "{key}: {}", v["summary"]);
     }
     assert!(v["summary"].get("table_pick").is_none(), "{}", v["summary"]);
-    let robots: Vec<_> = v["results"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["robot"].clone())
-        .collect();
-    assert_eq!(robots, ["panda", "panda", "fetch"]);
+    // One field of every result row.
+    let field = |v: &serde_json::Value, key: &str| -> Vec<serde_json::Value> {
+        v["results"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r[key].clone())
+            .collect()
+    };
+    assert_eq!(field(&v, "robot"), ["panda", "panda", "fetch"]);
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
-    let ids: Vec<_> = v["results"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r["id"].clone())
-        .collect();
-    assert_eq!(ids, vec![serde_json::json!(41)]);
+    assert_eq!(field(&v, "id"), vec![serde_json::json!(41)]);
     // The Panda's BiRRT takes the planner's connection unless told otherwise; a solved plan
     // reports its trees' sizes.
     for (connect, says) in [

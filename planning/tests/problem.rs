@@ -7,6 +7,9 @@ use hearth_planning::obstacles::{ObstacleId, Obstacles};
 use hearth_planning::problem::{Defect, JointsInfo, ObstacleSpec, ProblemError, ProblemSet, load_dir};
 use parry3d::math::Pose;
 use parry3d::shape::Ball;
+use support::GOOD;
+
+mod support;
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
@@ -148,15 +151,6 @@ fn bad_joints_info() {
     let e = JointsInfo::from_json_str(r#"{"robot": "r"}"#).unwrap_err();
     assert!(matches!(e, ProblemError::Json { .. }), "{e}");
 }
-
-/// A minimal valid set with one problem of each obstacle kind.
-const GOOD: &str = r#"{"robot": "toy", "family": "unit", "joint_names": ["j1", "j2"],
- "problems": [{"id": 5, "valid": true,
-  "obstacles": [
-   {"kind": "box", "center": [1, 0, 0], "half_extents": [0.1, 0.2, 0.3], "quat_xyzw": [0, 0, 0, 1], "name": "b"},
-   {"kind": "sphere", "center": [0, 1, 0], "radius": 0.2},
-   {"kind": "cylinder", "center": [0, 0, 1], "radius": 0.1, "half_length": 0.5, "quat_xyzw": [0, 0, 0, 1]}],
-  "start": [0, 0], "goals": [[1, 1], [2, 2]]}]}"#;
 
 fn invalid(json: &str) -> (Option<u32>, String, Defect) {
     match ProblemSet::from_json_str(json) {

@@ -6,14 +6,8 @@ use hearth_planning::obstacles::Obstacles;
 use hearth_planning::problem::{JointsInfo, ObstacleSpec, ProblemError, ProblemSet};
 use proptest::prelude::*;
 
-/// A valid set with one obstacle of each kind.
-const GOOD: &str = r#"{"robot": "toy", "family": "unit", "joint_names": ["j1", "j2"],
- "problems": [{"id": 5, "valid": true,
-  "obstacles": [
-   {"kind": "box", "center": [1, 0, 0], "half_extents": [0.1, 0.2, 0.3], "quat_xyzw": [0, 0, 0, 1], "name": "b"},
-   {"kind": "sphere", "center": [0, 1, 0], "radius": 0.2},
-   {"kind": "cylinder", "center": [0, 0, 1], "radius": 0.1, "half_length": 0.5, "quat_xyzw": [0, 0, 0, 1]}],
-  "start": [0, 0], "goals": [[1, 1], [2, 2]]}]}"#;
+mod support;
+use support::GOOD;
 
 const JOINTS: &str = r#"{"robot": "r", "joint_names": ["a", "b"], "lower": [-1, -1], "upper": [1, 1],
  "velocity": [1, 1], "acceleration": [2, 2], "continuous": [false, true],
