@@ -1178,3 +1178,59 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
         &budget(40_000),
     );
 }
+
+/// One coordinate of a request: inside the square, on or beyond its edges, or not a number.
+fn coordinate() -> impl proptest::strategy::Strategy<Value = f64> {
+    use proptest::prelude::*;
+    prop_oneof![
+        6 => 0.0..=1.0f64,
+        1 => prop_oneof![Just(0.0), Just(1.0), Just(-1e-12), Just(1.0 + 1e-12), Just(-5.0), Just(1e300)],
+        1 => prop_oneof![Just(f64::NAN), Just(f64::INFINITY), Just(f64::NEG_INFINITY)],
+    ]
+}
+
+/// A configuration of one to three coordinates (the square has two).
+fn configuration() -> impl proptest::strategy::Strategy<Value = Vec<f64>> {
+    use proptest::prelude::*;
+    prop_oneof![
+        8 => proptest::collection::vec(coordinate(), 2),
+        1 => proptest::collection::vec(coordinate(), 1),
+        1 => proptest::collection::vec(coordinate(), 3),
+    ]
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(150))]
+
+    /// Whatever the start, goals and budget, every planner either returns a path from the
+    /// start to one of the goals whose states are free and inside the square, or a typed
+    /// error; none panics, and bad input is [`PlanError::BadInput`] before any check.
+    #[test]
+    fn any_request_is_planned_or_refused(
+        start in configuration(),
+        goals in proptest::collection::vec(configuration(), 0..3),
+        iterations in proptest::prop_oneof![proptest::strategy::Just(0u64), 1u64..400],
+    ) {
+        let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals.clone()));
+        let budget = if iterations == 0 { Budget::default() } else { budget(iterations) };
+        let inside = |q: &[f64]| q.len() == 2 && q.iter().all(|x| (0.0..=1.0).contains(x));
+        let well_formed = inside(&start) && !goals.is_empty() && goals.iter().all(|g| inside(g)) && iterations > 0;
+        let mut region = narrow_passage();
+        for (name, r) in every_planner(&request, &budget, &mut region) {
+            match r {
+                Ok(s) => {
+                    let states = &s.path.states;
+                    proptest::prop_assert!(well_formed, "{name} planned bad input {start:?} {goals:?}");
+                    proptest::prop_assert_eq!(states.first(), Some(&start), "{}", name);
+                    proptest::prop_assert!(goals.iter().any(|g| Some(g) == states.last()), "{name}");
+                    proptest::prop_assert!(states.iter().all(|q| inside(q) && (narrow_passage().free)(q)), "{name}: {states:?}");
+                }
+                Err(PlanError::BadInput(m)) => proptest::prop_assert!(!well_formed, "{name}: {m} for {start:?} {goals:?}"),
+                Err(e) => proptest::prop_assert!(
+                    well_formed && matches!(e, PlanError::Timeout { .. } | PlanError::InvalidStart { .. } | PlanError::InvalidGoals { .. }),
+                    "{name}: {e:?} for {start:?} {goals:?}"
+                ),
+            }
+        }
+    }
+}
