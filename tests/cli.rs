@@ -457,6 +457,25 @@ fn bench_plan_writes_results_json() {
             .collect()
     };
     assert_eq!(field(&v, "robot"), ["panda", "panda", "fetch"]);
+    // LazyPRM takes the benchmark's step for the Fetch, its own for the Panda.
+    let o = bench_plan(&[
+        "--problems",
+        fetch,
+        "--planner",
+        "lazyprm",
+        "--warm-up",
+        "0",
+        "--shortcut",
+        "none",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success()
+            && err.contains("fetch: ")
+            && err.contains("LazyPRM step 4 rad")
+            && err.contains("LazyPRM step the planner's default"),
+        "{err}"
+    );
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
     assert_eq!(field(&v, "id"), vec![serde_json::json!(41)]);
