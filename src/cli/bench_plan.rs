@@ -219,10 +219,11 @@ fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
 }
 
 /// LazyPRM's roadmap step for a robot: `range` where given, else this benchmark's setting,
-/// measured on MotionBenchMaker (`docs/planning-log.md`, seventeenth round): the Fetch's torso
-/// + arm problems are solved more often with 4 rad than with the planner's default of 0.2 ×
-/// the extent (848 against 807 of 1,068 plans over seeds 0 and 1; bookshelf_small, _tall and
-/// cage gain, bookshelf_thin loses 3 %). Other robots, the Panda included, take the default.
+/// measured on MotionBenchMaker (`docs/planning-log.md`, seventeenth round): the Fetch's
+/// torso and arm problems are solved more often with 4 rad than with the planner's default of
+/// 0.2 × the extent (848 against 807 of 1,068 plans over seeds 0 and 1; bookshelf_small,
+/// bookshelf_tall and cage gain, bookshelf_thin loses 3 %). Other robots, the Panda included,
+/// take the default.
 fn lazyprm_range(robot: &str, range: Option<f64>) -> Option<f64> {
     range.or(match robot {
         "fetch" => Some(4.0),
