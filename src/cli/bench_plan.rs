@@ -231,6 +231,11 @@ fn lazyprm_range(robot: &str, range: Option<f64>) -> Option<f64> {
     })
 }
 
+/// A planner step for the setup line: `4 rad`, or the planner's default when unset.
+fn step_text(range: Option<f64>) -> String {
+    range.map_or("the planner's default".into(), |r| format!("{r} rad"))
+}
+
 /// Whether problem `id` of `family` passes the selectors (all pass when there are none).
 fn selected(selectors: &[(String, Option<u32>)], family: &str, id: u32) -> bool {
     selectors.is_empty() || selectors.iter().any(|(f, i)| f == family && i.is_none_or(|i| i == id))
@@ -395,9 +400,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             let step = match a.planner {
                 PlannerKind::Birrt => {
                     let birrt = birrt_for(&set.robot, &a);
-                    let range = birrt
-                        .range
-                        .map_or("the planner's default".into(), |r| format!("{r} rad"));
+                    let range = step_text(birrt.range);
                     let connect = match birrt.connect {
                         Connect::Other => "other",
                         Connect::Onward => "onward",
@@ -406,12 +409,11 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 }
                 PlannerKind::Rrt => {
                     let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
-                    let range = rrt.range.map_or("the planner's default".into(), |r| format!("{r} rad"));
+                    let range = step_text(rrt.range);
                     format!("; RRT step {range}, goal zone {}", rrt.goal_zone)
                 }
                 PlannerKind::Lazyprm => {
-                    let range = lazyprm_range(&set.robot, a.range)
-                        .map_or("the planner's default".into(), |r| format!("{r} rad"));
+                    let range = step_text(lazyprm_range(&set.robot, a.range));
                     format!("; LazyPRM step {range}")
                 }
             };
@@ -609,10 +611,11 @@ fn summarize(name: &str, rows: &[&Value]) -> Value {
     let column =
         |key: &str, scale: f64| -> Vec<f64> { ok.iter().filter_map(|r| r[key].as_f64()).map(|v| v * scale).collect() };
     let times = column("plan_time_s", 1e3);
-    let lengths = column("path_length", 1.0);
-    let checks = column("checks", 1.0);
-    let shortcut = column("shortcut_time_s", 1e3);
-    let durations = column("duration_s", 1.0);
+    let (time_median, time_p95) = (percentile(&times, 0.5), percentile(&times, 0.95));
+    let length = percentile(&column("path_length", 1.0), 0.5);
+    let checks = percentile(&column("checks", 1.0), 0.5);
+    let shortcut = percentile(&column("shortcut_time_s", 1e3), 0.5);
+    let duration = percentile(&column("duration_s", 1.0), 0.5);
     // No rate when nothing was attempted (every plan skipped).
     let rate = (!attempted.is_empty()).then(|| ok.len() as f64 / attempted.len() as f64);
     let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
@@ -623,18 +626,18 @@ fn summarize(name: &str, rows: &[&Value]) -> Value {
         rows.len() - attempted.len(),
         format!("{}/{}", ok.len(), attempted.len()),
         rate.map_or("-".to_owned(), |r| format!("{:.1}%", 100.0 * r)),
-        percentile(&times, 0.5),
-        percentile(&times, 0.95),
-        percentile(&lengths, 0.5),
-        percentile(&shortcut, 0.5),
-        percentile(&durations, 0.5),
-        percentile(&checks, 0.5)
+        time_median,
+        time_p95,
+        length,
+        shortcut,
+        duration,
+        checks
     );
     json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "solved": ok.len(), "attempted": attempted.len(),
            "success_rate": rate,
-           "plan_time_ms_median": percentile(&times, 0.5), "plan_time_ms_p95": percentile(&times, 0.95),
-           "path_length_median": percentile(&lengths, 0.5), "checks_median": percentile(&checks, 0.5),
-           "shortcut_time_ms_median": percentile(&shortcut, 0.5), "motion_duration_s_median": percentile(&durations, 0.5),
+           "plan_time_ms_median": time_median, "plan_time_ms_p95": time_p95,
+           "path_length_median": length, "checks_median": checks,
+           "shortcut_time_ms_median": shortcut, "motion_duration_s_median": duration,
            "smoothing_fell_back": fell_back})
 }
 
@@ -659,7 +662,7 @@ impl Progress {
             if done.is_multiple_of(10) || done == self.total {
                 eprint!("\r{done}/{} plans", self.total);
             }
-        } else if done == self.total || (done * 10 / self.total.max(1)) > ((done - 1) * 10 / self.total.max(1)) {
+        } else if done * 10 / self.total.max(1) > (done - 1) * 10 / self.total.max(1) {
             eprintln!("{done}/{} plans", self.total);
         }
     }
