@@ -73,6 +73,18 @@ fn describe(contact: &Option<String>) -> String {
 impl PlanError {
     /// The same error with the contact of an invalid start, or of the first goal, filled in
     /// by `explain` (which returns `None` for a valid state). Other errors pass through.
+    ///
+    /// ```
+    /// use hearth_planning::error::PlanError;
+    /// use hearth_planning::planner::{Goal, PlanRequest};
+    ///
+    /// let request = PlanRequest::new(vec![0.0], Goal::AnyOf(vec![vec![2.0], vec![3.0]]));
+    /// let why = |q: &[f64]| (q[0] > 1.0).then(|| format!("x = {} is inside the wall", q[0]));
+    /// let e = PlanError::InvalidGoals { count: 2, first_contact: None }.explain_with(&request, why);
+    /// assert_eq!(e, PlanError::InvalidGoals { count: 2, first_contact: Some("x = 2 is inside the wall".into()) });
+    /// let other = PlanError::BadInput("no goal state given".into());
+    /// assert_eq!(other.clone().explain_with(&request, why), other);
+    /// ```
     pub fn explain_with(mut self, request: &PlanRequest, mut explain: impl FnMut(&[f64]) -> Option<String>) -> Self {
         match &mut self {
             PlanError::InvalidStart { contact } => *contact = explain(&request.start),

@@ -46,6 +46,17 @@ pub struct PoseGoal {
 
 impl PoseGoal {
     /// A goal with 8 solutions from at most 32 IK calls, 0.1 rad apart.
+    ///
+    /// ```
+    /// use hearth_planning::goal::PoseGoal;
+    /// use hearth_planning::kinematics::IkTarget;
+    /// use hearth_planning::kinematics::nalgebra::Point3;
+    ///
+    /// let goal = PoseGoal::new(IkTarget::Position(Point3::new(0.4, 0.0, 0.5)));
+    /// assert_eq!((goal.solutions, goal.max_calls, goal.min_separation), (8, 32, 0.1));
+    /// let first_only = PoseGoal { solutions: 1, ..goal };
+    /// assert_eq!(first_only.max_calls, 32);
+    /// ```
     pub fn new(target: IkTarget) -> Self {
         Self {
             target,
@@ -59,6 +70,36 @@ impl PoseGoal {
     /// keeping solutions that `validator` accepts and that differ from those already found.
     /// Fails with [`PlanError::BadInput`] for an unusable target or seed and
     /// [`PlanError::NoGoalConfiguration`] when no collision-free solution is found.
+    ///
+    /// ```
+    /// use hearth_planning::goal::PoseGoal;
+    /// use hearth_planning::kinematics::nalgebra::Point3;
+    /// use hearth_planning::kinematics::{Chain, IkSettings, IkSolver, IkTarget, RobotModel};
+    /// use hearth_planning::{PlanError, StateValidator};
+    /// use rand::SeedableRng;
+    ///
+    /// // Accepts states whose first joint is positive (or none at all).
+    /// struct Left(bool);
+    /// impl StateValidator for Left {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 && q[0] > 0.0 }
+    ///     fn checks(&self) -> u64 { 0 }
+    /// }
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = Chain::named(&panda, "arm").unwrap();
+    /// let mut ik = IkSolver::new(arm, "panda_hand_tcp", IkSettings::default()).unwrap();
+    /// let point = Point3::new(0.3, 0.3, 0.5);
+    /// let goal = PoseGoal { solutions: 3, ..PoseGoal::new(IkTarget::Position(point)) };
+    /// let seed = [0.0, -0.5, 0.0, -2.0, 0.0, 1.6, 0.8];
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+    /// let found = goal.sample(&mut ik, &mut Left(true), &seed, &mut rng).unwrap();
+    /// assert_eq!(found.states().len(), 3);
+    /// for q in found.states() {
+    ///     assert!(q[0] > 0.0 && (ik.tool_pose(q).unwrap().translation.vector - point.coords).norm() < 1e-3);
+    /// }
+    /// let none = PoseGoal { max_calls: 2, ..goal };
+    /// let e = none.sample(&mut ik, &mut Left(false), &seed, &mut rng).unwrap_err();
+    /// assert!(matches!(e, PlanError::NoGoalConfiguration { .. }));
+    /// ```
     pub fn sample<V: StateValidator + ?Sized, R: Rng + ?Sized>(
         &self,
         ik: &mut IkSolver,

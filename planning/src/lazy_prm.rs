@@ -13,7 +13,16 @@ use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, resolve_
 use crate::space::{Space, pull_towards, steer};
 use crate::validity::StateValidator;
 
-/// Settings of [`LazyPrm`], serde-derivable so a TOML file can set them.
+/// Settings of [`LazyPrm`], serde-derivable so a TOML file can set them; fields left out
+/// keep their defaults.
+///
+/// ```
+/// use hearth_planning::lazy_prm::LazyPrmSettings;
+///
+/// let settings: LazyPrmSettings = serde_json::from_str(r#"{ "k": 6, "range": 0.5 }"#).unwrap();
+/// assert_eq!((settings.k, settings.range), (6, Some(0.5)));
+/// assert_eq!(settings.batch, LazyPrmSettings::default().batch);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct LazyPrmSettings {
@@ -163,6 +172,14 @@ const MAX_FAILURES: usize = 512;
 
 impl LazyPrm {
     /// A planner with these settings and an empty roadmap.
+    ///
+    /// ```
+    /// use hearth_planning::lazy_prm::{LazyPrm, LazyPrmSettings};
+    ///
+    /// let prm = LazyPrm::new(LazyPrmSettings { k: 6, ..LazyPrmSettings::default() });
+    /// assert_eq!(prm.settings().k, 6);
+    /// assert_eq!(prm.roadmap_size(), 0);
+    /// ```
     pub fn new(settings: LazyPrmSettings) -> Self {
         Self {
             settings,
@@ -171,16 +188,71 @@ impl LazyPrm {
     }
 
     /// The settings.
+    ///
+    /// ```
+    /// use hearth_planning::lazy_prm::{LazyPrm, LazyPrmSettings};
+    ///
+    /// assert_eq!(LazyPrm::default().settings(), &LazyPrmSettings::default());
+    /// ```
     pub fn settings(&self) -> &LazyPrmSettings {
         &self.settings
     }
 
-    /// Forgets the roadmap (call it when the scene changes).
+    /// Forgets the roadmap (call it when the scene changes); the settings stay.
+    ///
+    /// ```
+    /// # use hearth_planning::lazy_prm::LazyPrm;
+    /// # use hearth_planning::motion::MotionValidator;
+    /// # use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+    /// # use hearth_planning::space::JointSpace;
+    /// # use hearth_planning::validity::StateValidator;
+    /// # use rand::SeedableRng;
+    /// # struct Free(u64);
+    /// # impl StateValidator for Free {
+    /// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+    /// #     fn checks(&self) -> u64 { self.0 }
+    /// # }
+    /// // `Free` is a validator that accepts every state.
+    /// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+    /// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    /// let mut prm = LazyPrm::default();
+    /// prm.plan(&mut motion, &mut Free(0), &request, &Budget::iterations(1_000), &mut rng).unwrap();
+    /// assert!(prm.roadmap_size() > 0);
+    /// prm.clear();
+    /// assert_eq!(prm.roadmap_size(), 0);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn clear(&mut self) {
         self.roadmap = None;
     }
 
-    /// Number of roadmap vertices.
+    /// Number of roadmap vertices (0 before the first query and after [`LazyPrm::clear`]).
+    ///
+    /// ```
+    /// # use hearth_planning::lazy_prm::LazyPrm;
+    /// # use hearth_planning::motion::MotionValidator;
+    /// # use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+    /// # use hearth_planning::space::JointSpace;
+    /// # use hearth_planning::validity::StateValidator;
+    /// # use rand::SeedableRng;
+    /// # struct Free(u64);
+    /// # impl StateValidator for Free {
+    /// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+    /// #     fn checks(&self) -> u64 { self.0 }
+    /// # }
+    /// // `Free` is a validator that accepts every state.
+    /// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+    /// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    /// let mut prm = LazyPrm::default();
+    /// assert_eq!(prm.roadmap_size(), 0);
+    /// let budget = Budget::iterations(1_000);
+    /// let solution = prm.plan(&mut motion, &mut Free(0), &request, &budget, &mut rng).unwrap();
+    /// // The start and the goal are roadmap vertices too.
+    /// assert!(prm.roadmap_size() >= solution.path.states.len());
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn roadmap_size(&self) -> usize {
         self.roadmap.as_ref().map_or(0, |r| r.nn.len())
     }

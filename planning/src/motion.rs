@@ -36,7 +36,18 @@ pub struct MotionValidator<S: Space> {
 }
 
 impl<S: Space> MotionValidator<S> {
-    /// A validator that checks states at most `resolution` apart (in the space's distance).
+    /// A validator that checks states at most `resolution` apart (in the space's distance). A
+    /// resolution that is not positive (or NaN) counts as 0.01.
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
+    /// assert_eq!(MotionValidator::new(space.clone(), 0.05).resolution(), 0.05);
+    /// assert_eq!(MotionValidator::new(space, 0.0).resolution(), 0.01);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn new(space: S, resolution: f64) -> Self {
         let dim = space.dim();
         Self {
@@ -49,22 +60,73 @@ impl<S: Space> MotionValidator<S> {
         }
     }
 
-    /// The space.
+    /// The space edges are interpolated and measured in.
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let mv = MotionValidator::new(JointSpace::new(&[0.0; 3], &[1.0; 3], &[false; 3])?, 0.01);
+    /// assert_eq!(mv.space().dim(), 3);
+    /// assert_eq!(mv.space().distance(&[0.0; 3], &[0.0, 0.3, 0.4]), 0.5);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn space(&self) -> &S {
         &self.space
     }
 
-    /// The resolution.
+    /// The resolution: the largest distance between two consecutive states checked along an
+    /// edge.
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let mv = MotionValidator::new(JointSpace::new(&[0.0], &[1.0], &[false])?, 0.02);
+    /// assert_eq!(mv.resolution(), 0.02);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn resolution(&self) -> f64 {
         self.resolution
     }
 
-    /// Motions checked so far.
+    /// Motions checked so far (calls to [`MotionValidator::check_motion`], valid or not).
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    /// # use hearth_planning::validity::StateValidator;
+    /// # struct Free(u64);
+    /// # impl StateValidator for Free {
+    /// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+    /// #     fn checks(&self) -> u64 { self.0 }
+    /// # }
+    /// // `Free` is a validator that accepts every state.
+    /// let mut mv = MotionValidator::new(JointSpace::new(&[0.0], &[1.0], &[false])?, 0.1);
+    /// assert_eq!(mv.motions(), 0);
+    /// mv.check_motion(&mut Free(0), &[0.0], &[1.0]);
+    /// mv.check_motion(&mut Free(0), &[1.0], &[0.5]);
+    /// assert_eq!(mv.motions(), 2);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn motions(&self) -> u64 {
         self.motions
     }
 
-    /// Number of segments an edge from `a` to `b` is cut into.
+    /// Number of segments an edge from `a` to `b` is cut into: its length over the resolution,
+    /// rounded up, and at least 1. [`MotionValidator::check_motion`] checks the `segments - 1`
+    /// states between them.
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let mv = MotionValidator::new(JointSpace::new(&[0.0], &[2.0], &[false])?, 0.25);
+    /// assert_eq!(mv.segments(&[0.0], &[1.0]), 4);
+    /// assert_eq!(mv.segments(&[0.0], &[1.1]), 5);
+    /// assert_eq!(mv.segments(&[0.5], &[0.5]), 1);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn segments(&self, a: &[f64], b: &[f64]) -> u32 {
         let d = self.space.distance(a, b);
         ((d / self.resolution).ceil() as u32).max(1)
@@ -73,6 +135,24 @@ impl<S: Space> MotionValidator<S> {
     /// Whether every intermediate state from `a` to `b` is valid. The states go to the
     /// validator [`BATCH`] at a time in checking order ([`StateValidator::first_invalid`]), so
     /// an implementation can compute them together.
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::StateValidator;
+    ///
+    /// // Records the states it is asked about.
+    /// struct Log(Vec<f64>);
+    /// impl StateValidator for Log {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0.push(q[0]); true }
+    ///     fn checks(&self) -> u64 { self.0.len() as u64 }
+    /// }
+    /// let mut mv = MotionValidator::new(JointSpace::new(&[0.0], &[1.0], &[false])?, 0.25);
+    /// let mut log = Log(Vec::new());
+    /// assert!(mv.check_motion(&mut log, &[0.0], &[1.0]));
+    /// assert_eq!(log.0, [0.5, 0.25, 0.75]); // midpoint first, end points never
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn check_motion<V: StateValidator + ?Sized>(&mut self, validator: &mut V, a: &[f64], b: &[f64]) -> bool {
         self.motions += 1;
         let n = self.segments(a, b);
@@ -101,4 +181,26 @@ impl<S: Space> MotionValidator<S> {
 }
 
 /// How many states of an edge [`MotionValidator::check_motion`] hands to the validator at once.
+///
+/// ```
+/// use hearth_planning::motion::{MotionValidator, BATCH};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::validity::StateValidator;
+///
+/// // Records how many states each call to `first_invalid` gets.
+/// struct Batches(Vec<usize>);
+/// impl StateValidator for Batches {
+///     fn is_valid(&mut self, _: &[f64]) -> bool { true }
+///     fn checks(&self) -> u64 { 0 }
+///     fn first_invalid(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+///         self.0.push(states.len() / dim);
+///         None
+///     }
+/// }
+/// let mut mv = MotionValidator::new(JointSpace::new(&[0.0], &[1.0], &[false])?, 0.125);
+/// let mut batches = Batches(Vec::new());
+/// assert!(mv.check_motion(&mut batches, &[0.0], &[1.0])); // 7 states between the ends
+/// assert_eq!(batches.0, [BATCH, 7 - BATCH]);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
 pub const BATCH: usize = 4;

@@ -83,6 +83,14 @@ pub struct NearestNeighbors {
 
 impl NearestNeighbors {
     /// An empty index of `dim`-dimensional states.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let nn = NearestNeighbors::new(3);
+    /// assert!(nn.is_empty());
+    /// assert_eq!((nn.dim(), nn.len(), nn.ids()), (3, 0, 0));
+    /// ```
     pub fn new(dim: usize) -> Self {
         Self {
             dim,
@@ -96,39 +104,106 @@ impl NearestNeighbors {
     }
 
     /// Dimension of the states.
+    ///
+    /// ```
+    /// assert_eq!(hearth_planning::nn::NearestNeighbors::new(7).dim(), 7);
+    /// ```
     pub fn dim(&self) -> usize {
         self.dim
     }
 
     /// Number of states held (removed ones excluded).
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(1);
+    /// let a = nn.insert(&[0.0]);
+    /// nn.insert(&[1.0]);
+    /// nn.remove(a);
+    /// assert_eq!(nn.len(), 1);
+    /// ```
     pub fn len(&self) -> usize {
         self.live
     }
 
-    /// Whether no state is held.
+    /// Whether no state is held (all removed counts as empty).
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(1);
+    /// let id = nn.insert(&[0.5]);
+    /// assert!(!nn.is_empty());
+    /// nn.remove(id);
+    /// assert!(nn.is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.live == 0
     }
 
-    /// Number of ids handed out so far (removed ones included).
+    /// Number of ids handed out so far (removed ones included): every id below it is valid for
+    /// [`NearestNeighbors::state`].
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(1);
+    /// for q in [0.0, 1.0, 2.0] {
+    ///     nn.insert(&[q]);
+    /// }
+    /// nn.remove(1);
+    /// assert_eq!((nn.ids(), nn.len()), (3, 2));
+    /// ```
     pub fn ids(&self) -> usize {
         self.removed.len()
     }
 
-    /// The state with id `id`.
+    /// The state with id `id` (removed states included).
     ///
     /// Panics if `id` was never handed out.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(2);
+    /// let id = nn.insert(&[0.25, -1.0]);
+    /// nn.remove(id);
+    /// assert_eq!(nn.state(id), &[0.25, -1.0]);
+    /// ```
     #[inline]
     pub fn state(&self, id: usize) -> &[f64] {
         &self.states[id * self.dim..(id + 1) * self.dim]
     }
 
     /// Whether `id` was removed.
+    ///
+    /// Panics if `id` was never handed out.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(1);
+    /// let (a, b) = (nn.insert(&[0.0]), nn.insert(&[1.0]));
+    /// nn.remove(b);
+    /// assert!(!nn.is_removed(a) && nn.is_removed(b));
+    /// ```
     pub fn is_removed(&self, id: usize) -> bool {
         self.removed[id]
     }
 
-    /// Removes every state.
+    /// Removes every state and forgets the ids: the next insertion gets id 0 again.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(1);
+    /// nn.insert(&[0.0]);
+    /// nn.insert(&[1.0]);
+    /// nn.clear();
+    /// assert_eq!((nn.len(), nn.ids()), (0, 0));
+    /// assert_eq!(nn.insert(&[2.0]), 0);
+    /// ```
     pub fn clear(&mut self) {
         *self = Self::new(self.dim);
     }
@@ -136,6 +211,15 @@ impl NearestNeighbors {
     /// Adds a state and returns its id (ids count up from 0).
     ///
     /// Panics if `q` does not have [`NearestNeighbors::dim`] coordinates.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    ///
+    /// let mut nn = NearestNeighbors::new(2);
+    /// assert_eq!(nn.insert(&[0.0, 0.0]), 0);
+    /// assert_eq!(nn.insert(&[1.0, 0.0]), 1);
+    /// assert_eq!(nn.state(1), &[1.0, 0.0]);
+    /// ```
     pub fn insert(&mut self, q: &[f64]) -> usize {
         assert_eq!(q.len(), self.dim, "state dimension");
         let id = self.removed.len();
@@ -146,7 +230,24 @@ impl NearestNeighbors {
         id
     }
 
-    /// Marks a state removed: queries no longer return it (its id stays taken).
+    /// Marks a state removed: queries no longer return it (its id stays taken). Removing it
+    /// again does nothing.
+    ///
+    /// Panics if `id` was never handed out.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[10.0], &[false])?;
+    /// let mut nn = NearestNeighbors::new(1);
+    /// let (a, b) = (nn.insert(&[1.0]), nn.insert(&[5.0]));
+    /// nn.remove(a);
+    /// nn.remove(a);
+    /// assert_eq!(nn.len(), 1);
+    /// assert_eq!(nn.nearest(&space, &[0.0]), Some(b));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn remove(&mut self, id: usize) {
         if !self.removed[id] {
             self.removed[id] = true;
@@ -201,6 +302,22 @@ impl NearestNeighbors {
     /// near ones), or `None` when empty.
     ///
     /// Takes `&mut self` because queries index the buffered insertions first.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false])?;
+    /// let mut nn = NearestNeighbors::new(2);
+    /// assert_eq!(nn.nearest(&space, &[0.5, 0.5]), None);
+    /// for q in [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]] {
+    ///     nn.insert(&q);
+    /// }
+    /// assert_eq!(nn.nearest(&space, &[0.1, 0.8]), Some(2));
+    /// // Ids 0, 1 and 2 are equally far from the centre: the lowest wins.
+    /// assert_eq!(nn.nearest(&space, &[0.5, 0.5]), Some(0));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn nearest<S: Space>(&mut self, space: &S, q: &[f64]) -> Option<usize> {
         self.flush(space);
         let mut c = Nearest {
@@ -211,7 +328,22 @@ impl NearestNeighbors {
         (c.id != u32::MAX).then_some(c.id as usize)
     }
 
-    /// Ids of the `k` nearest states to `q`, nearest first (ties by id).
+    /// Ids of the `k` nearest states to `q`, nearest first (ties by id); all of them when
+    /// fewer than `k` are held.
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[10.0], &[false])?;
+    /// let mut nn = NearestNeighbors::new(1);
+    /// for q in [0.0, 4.0, 5.0, 9.0] {
+    ///     nn.insert(&[q]);
+    /// }
+    /// assert_eq!(nn.k_nearest(&space, &[8.0], 2), vec![3, 2]);
+    /// assert_eq!(nn.k_nearest(&space, &[8.0], 10), vec![3, 2, 1, 0]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn k_nearest<S: Space>(&mut self, space: &S, q: &[f64], k: usize) -> Vec<usize> {
         let mut out = Vec::with_capacity(k);
         self.k_nearest_into(space, q, k, &mut out);
@@ -253,6 +385,20 @@ impl NearestNeighbors {
     }
 
     /// Ids of every state within `radius` of `q` (inclusive), nearest first (ties by id).
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[10.0], &[false])?;
+    /// let mut nn = NearestNeighbors::new(1);
+    /// for q in [0.0, 4.0, 5.0, 7.0] {
+    ///     nn.insert(&[q]);
+    /// }
+    /// assert_eq!(nn.within_radius(&space, &[5.5], 1.5), vec![2, 1, 3]);
+    /// assert!(nn.within_radius(&space, &[2.0], 1.0).is_empty());
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn within_radius<S: Space>(&mut self, space: &S, q: &[f64], radius: f64) -> Vec<usize> {
         self.flush(space);
         let mut c = Radius {

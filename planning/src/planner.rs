@@ -35,7 +35,16 @@ pub struct Budget {
 }
 
 impl Budget {
-    /// A time limit of `secs` seconds (negative or NaN counts as zero).
+    /// A time limit of `secs` seconds (negative or NaN counts as zero, more than 10⁹ s as 10⁹ s).
+    ///
+    /// ```
+    /// use std::time::Duration;
+    /// use hearth_planning::planner::Budget;
+    ///
+    /// assert_eq!(Budget::time(0.25).time, Some(Duration::from_millis(250)));
+    /// assert_eq!(Budget::time(0.25).iterations, None);
+    /// assert_eq!(Budget::time(-1.0).time, Some(Duration::ZERO));
+    /// ```
     pub fn time(secs: f64) -> Self {
         Self {
             time: Some(Duration::from_secs_f64(if secs > 0.0 { secs.min(1e9) } else { 0.0 })),
@@ -43,7 +52,13 @@ impl Budget {
         }
     }
 
-    /// An iteration limit.
+    /// An iteration limit and no time limit: the budget for reproducible runs.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Budget;
+    ///
+    /// assert_eq!(Budget::iterations(500), Budget { time: None, iterations: Some(500) });
+    /// ```
     pub fn iterations(n: u64) -> Self {
         Self {
             time: None,
@@ -51,13 +66,32 @@ impl Budget {
         }
     }
 
-    /// The same budget with an iteration limit too.
+    /// The same budget with an iteration limit too (replacing any it had).
+    ///
+    /// ```
+    /// use std::time::Duration;
+    /// use hearth_planning::planner::Budget;
+    ///
+    /// let b = Budget::time(2.0).with_iterations(100);
+    /// assert_eq!((b.time, b.iterations), (Some(Duration::from_secs(2)), Some(100)));
+    /// assert_eq!(Budget::iterations(5).with_iterations(7).iterations, Some(7));
+    /// ```
     pub fn with_iterations(mut self, n: u64) -> Self {
         self.iterations = Some(n);
         self
     }
 
-    /// The same budget with a time limit too.
+    /// The same budget with a time limit too (replacing any it had), read as [`Budget::time`]
+    /// reads `secs`.
+    ///
+    /// ```
+    /// use std::time::Duration;
+    /// use hearth_planning::planner::Budget;
+    ///
+    /// let b = Budget::iterations(100).with_time(0.5);
+    /// assert_eq!((b.time, b.iterations), (Some(Duration::from_millis(500)), Some(100)));
+    /// assert_eq!(Budget::time(1.0).with_time(f64::NAN).time, Some(Duration::ZERO));
+    /// ```
     pub fn with_time(mut self, secs: f64) -> Self {
         self.time = Budget::time(secs).time;
         self
@@ -79,6 +113,15 @@ impl Budget {
 /// [`PoseGoal::sample`](crate::goal::PoseGoal::sample) (collision-aware IK), which every planner
 /// handles natively (BiRRT seeds its goal tree with all of them, LazyPRM searches to the nearest
 /// reachable one).
+///
+/// ```
+/// use hearth_planning::planner::Goal;
+///
+/// let one = Goal::Config(vec![0.0, 1.0]);
+/// let either = Goal::AnyOf(vec![vec![0.0, 1.0], vec![1.0, 0.0]]);
+/// assert_eq!(one.states(), &either.states()[..1]);
+/// assert_eq!(either.states().len(), 2);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Goal {
     /// One goal configuration.
@@ -88,7 +131,15 @@ pub enum Goal {
 }
 
 impl Goal {
-    /// The goal configurations.
+    /// The goal configurations: one for [`Goal::Config`], all of them for [`Goal::AnyOf`] (planners
+    /// reject an empty list with [`PlanError::BadInput`]).
+    ///
+    /// ```
+    /// use hearth_planning::planner::Goal;
+    ///
+    /// assert_eq!(Goal::Config(vec![0.5]).states(), &[vec![0.5]]);
+    /// assert!(Goal::AnyOf(vec![]).states().is_empty());
+    /// ```
     pub fn states(&self) -> &[Vec<f64>] {
         match self {
             Goal::Config(q) => std::slice::from_ref(q),
@@ -115,12 +166,30 @@ pub struct PlanRequest {
 
 impl PlanRequest {
     /// A request from `start` to `goal`.
+    ///
+    /// ```
+    /// use hearth_planning::planner::{Goal, PlanRequest};
+    ///
+    /// let r = PlanRequest::new(vec![0.0], Goal::Config(vec![1.0]));
+    /// assert_eq!(r, PlanRequest { start: vec![0.0], goal: Goal::Config(vec![1.0]) });
+    /// ```
     pub fn new(start: Vec<f64>, goal: Goal) -> Self {
         Self { start, goal }
     }
 }
 
-/// A path: states whose consecutive pairs are valid motions, from the start to a goal.
+/// A path: states whose consecutive pairs are valid motions, from the start to a goal. It
+/// serialises as `{"states": [[...], ...]}`.
+///
+/// ```
+/// use hearth_planning::planner::Path;
+///
+/// let path = Path { states: vec![vec![0.0, 0.0], vec![1.0, 0.5]] };
+/// let json = serde_json::to_string(&path)?;
+/// assert_eq!(json, r#"{"states":[[0.0,0.0],[1.0,0.5]]}"#);
+/// assert_eq!(serde_json::from_str::<Path>(&json)?, path);
+/// # Ok::<(), serde_json::Error>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Path {
     /// The states, start first.
@@ -145,6 +214,31 @@ impl Path {
 }
 
 /// What a planner did.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::BiRrt;
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let mut free = Free(0);
+/// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let solution = BiRrt::default().plan(&mut motion, &mut free, &request, &Budget::iterations(100), &mut rng)?;
+/// let stats = solution.stats;
+/// assert_eq!(stats.tree_sizes.len(), 2); // the start tree and the goal tree
+/// assert!(stats.iterations <= 100);
+/// assert_eq!((stats.states_checked, stats.motions_checked), (free.checks(), motion.motions()));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlanStats {
     /// Iterations run (see each planner for what one is).
@@ -161,6 +255,29 @@ pub struct PlanStats {
 }
 
 /// A found path and what finding it took.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::Rrt;
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let solution = Rrt::default().plan(&mut motion, &mut Free(0), &request, &Budget::iterations(1_000), &mut rng)?;
+/// assert_eq!(solution.path.states.first(), Some(&request.start));
+/// assert_eq!(solution.path.states.last(), Some(&vec![0.9, 0.9]));
+/// assert!(solution.stats.iterations >= 1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Solution {
     /// The path, from the request's start to one of its goals.
@@ -177,9 +294,62 @@ pub struct Solution {
 /// [`PlanError::InvalidStart`]; all goals invalid [`PlanError::InvalidGoals`]. Invalid goals
 /// among valid ones are skipped. A run is deterministic for a given generator state and an
 /// iteration-only budget.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::{Budget, Goal, Path, PlanRequest, Planner};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::{BiRrt, LazyPrm, Rrt};
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // Any planner of a joint space, across an empty square; `Free` accepts every state.
+/// fn cross<P: Planner<JointSpace>>(mut planner: P) -> Path {
+///     let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap(), 0.01);
+///     let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+///     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+///     planner.plan(&mut motion, &mut Free(0), &request, &Budget::iterations(1_000), &mut rng).unwrap().path
+/// }
+/// assert_eq!(cross(Rrt::default()).states.last(), Some(&vec![0.9, 0.9]));
+/// assert_eq!(cross(BiRrt::default()).states.last(), Some(&vec![0.9, 0.9]));
+/// assert_eq!(cross(LazyPrm::default()).states.last(), Some(&vec![0.9, 0.9]));
+/// ```
 pub trait Planner<S: Space> {
     /// Plans from `request.start` to one of its goals, checking states with `validator` and
-    /// edges with `motion` (which also provides the space), until `budget` runs out.
+    /// edges with `motion` (which also provides the space), until `budget` runs out
+    /// ([`PlanError::Timeout`]).
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::StateValidator;
+    /// use hearth_planning::{PlanError, Rrt};
+    /// use rand::SeedableRng;
+    ///
+    /// // A disc of obstacle in the middle of the unit square.
+    /// struct Disc(u64);
+    /// impl StateValidator for Disc {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; (q[0] - 0.5).hypot(q[1] - 0.5) > 0.2 }
+    ///     fn checks(&self) -> u64 { self.0 }
+    /// }
+    /// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    /// let mut plan = |start: Vec<f64>, budget: Budget| {
+    ///     let request = PlanRequest::new(start, Goal::Config(vec![0.9, 0.9]));
+    ///     Rrt::default().plan(&mut motion, &mut Disc(0), &request, &budget, &mut rng)
+    /// };
+    /// assert_eq!(plan(vec![0.1, 0.1], Budget::iterations(5_000))?.path.states.last(), Some(&vec![0.9, 0.9]));
+    /// assert!(matches!(plan(vec![0.5, 0.5], Budget::iterations(10)), Err(PlanError::InvalidStart { .. })));
+    /// assert!(matches!(plan(vec![2.0, 0.1], Budget::iterations(10)), Err(PlanError::BadInput(_))));
+    /// assert!(matches!(plan(vec![0.1, 0.1], Budget::default()), Err(PlanError::BadInput(_))));
+    /// assert!(matches!(plan(vec![0.1, 0.1], Budget::iterations(0)), Err(PlanError::Timeout { .. })));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     fn plan<V: StateValidator + ?Sized, R: Rng + ?Sized>(
         &mut self,
         motion: &mut MotionValidator<S>,

@@ -37,6 +37,19 @@ use serde::{Deserialize, Serialize};
 use crate::obstacles::{Obstacle, ParryScene};
 
 /// How far a quaternion's norm may be from 1 before it is rejected.
+///
+/// ```
+/// use hearth_planning::problem::{Defect, ProblemSet, QUATERNION_NORM_TOLERANCE};
+///
+/// let set = r#"{"robot": "toy", "family": "f", "joint_names": ["j"], "problems": [{"id": 1, "start": [0],
+///   "goals": [[1]], "obstacles": [{"kind": "box", "center": [0, 0, 0], "half_extents": [1, 1, 1],
+///   "quat_xyzw": [0, 0, 0, W]}]}]}"#;
+/// let with_w = |w: f64| ProblemSet::from_json_str(&set.replace('W', &w.to_string()));
+/// assert!(with_w(1.0 + 0.5 * QUATERNION_NORM_TOLERANCE).is_ok());
+/// let e = with_w(1.01).unwrap_err();
+/// assert_eq!(e.field(), Some("obstacles[0].quat_xyzw"));
+/// assert!(matches!(e.defect(), Some(Defect::NotUnitQuaternion(_))));
+/// ```
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 
 /// Largest magnitude of an obstacle's coordinate or size, in metres (1,000 km). Obstacles become
@@ -56,9 +69,28 @@ pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-4;
 pub const MAX_EXTENT: f64 = 1.0e6;
 
 /// The file name in a problem folder that holds [`JointsInfo`], skipped by [`load_dir`].
+///
+/// ```
+/// use hearth_planning::problem::{JointsInfo, JOINTS_FILE};
+///
+/// let folder = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"));
+/// let joints = JointsInfo::load(folder.join(JOINTS_FILE))?;
+/// assert_eq!(joints.robot, "panda");
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 pub const JOINTS_FILE: &str = "joints.json";
 
 /// What is wrong with one field of a problem file.
+///
+/// ```
+/// use hearth_planning::problem::{Defect, ProblemSet};
+///
+/// let set = r#"{"robot": "toy", "family": "f", "joint_names": ["j1", "j2"],
+///   "problems": [{"id": 4, "start": [0, 0], "goals": [[1]]}]}"#;
+/// let e = ProblemSet::from_json_str(set).unwrap_err();
+/// assert_eq!(e.defect(), Some(&Defect::WrongLength { expected: 2, found: 1 }));
+/// assert_eq!(e.to_string(), "<string>: problem 4: goals[0] has 1 values, expected 2");
+/// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Defect {
     /// The field is absent.
@@ -101,6 +133,16 @@ pub enum Defect {
 }
 
 /// Loading a problem or joints file failed.
+///
+/// ```
+/// use hearth_planning::problem::{ProblemError, ProblemSet};
+///
+/// let e = ProblemSet::from_json_str("{ not json").unwrap_err();
+/// assert!(matches!(e, ProblemError::Json { .. }));
+/// assert!(e.to_string().starts_with("<string>: malformed JSON"));
+/// let e = ProblemSet::load("/no/such/file.json").unwrap_err();
+/// assert!(matches!(e, ProblemError::Io { .. }));
+/// ```
 #[derive(Debug, thiserror::Error)]
 pub enum ProblemError {
     /// The file or folder could not be read.
@@ -137,6 +179,15 @@ pub enum ProblemError {
 
 impl ProblemError {
     /// The defect, for [`ProblemError::Invalid`].
+    ///
+    /// ```
+    /// use hearth_planning::problem::{Defect, ProblemSet};
+    ///
+    /// let set = r#"{"robot": "toy", "family": "f", "joint_names": ["j"], "problems": [{"id": 1,
+    ///   "obstacles": [{"kind": "sphere", "center": [0, 0, 1], "radius": -0.1}], "start": [0], "goals": [[1]]}]}"#;
+    /// assert_eq!(ProblemSet::from_json_str(set).unwrap_err().defect(), Some(&Defect::Negative(-0.1)));
+    /// assert_eq!(ProblemSet::from_json_str("[]").unwrap_err().defect(), None); // not a set at all
+    /// ```
     pub fn defect(&self) -> Option<&Defect> {
         match self {
             Self::Invalid { defect, .. } => Some(defect),
@@ -145,6 +196,14 @@ impl ProblemError {
     }
 
     /// The field path, for [`ProblemError::Invalid`].
+    ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let set = r#"{"robot": "toy", "family": "f", "joint_names": ["j"], "problems": [{"id": 1,
+    ///   "obstacles": [{"kind": "sphere", "center": [0, 0, 1], "radius": -0.1}], "start": [0], "goals": [[1]]}]}"#;
+    /// assert_eq!(ProblemSet::from_json_str(set).unwrap_err().field(), Some("obstacles[0].radius"));
+    /// ```
     pub fn field(&self) -> Option<&str> {
         match self {
             Self::Invalid { field, .. } => Some(field),
@@ -153,6 +212,16 @@ impl ProblemError {
     }
 
     /// The problem id, for [`ProblemError::Invalid`] inside a problem.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let bad_start = r#"{"robot": "toy", "family": "f", "joint_names": ["j"],
+    ///   "problems": [{"id": 9, "start": [0, 0], "goals": [[1]]}]}"#;
+    /// assert_eq!(ProblemSet::from_json_str(bad_start).unwrap_err().problem(), Some(9));
+    /// let no_joints = r#"{"robot": "toy", "family": "f", "joint_names": [], "problems": []}"#;
+    /// assert_eq!(ProblemSet::from_json_str(no_joints).unwrap_err().problem(), None); // a file-level field
+    /// ```
     pub fn problem(&self) -> Option<u32> {
         match self {
             Self::Invalid { problem, .. } => *problem,
@@ -160,7 +229,17 @@ impl ProblemError {
         }
     }
 
-    /// The file the error is about.
+    /// The file the error is about: the path given to a `load` function, `<string>` for
+    /// parsed strings, `<memory>` for [`ProblemSet::validate`].
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let e = ProblemSet::load("/no/such/file.json").unwrap_err();
+    /// assert_eq!(e.file(), Path::new("/no/such/file.json"));
+    /// assert_eq!(ProblemSet::from_json_str("{").unwrap_err().file(), Path::new("<string>"));
+    /// ```
     pub fn file(&self) -> &Path {
         match self {
             Self::Io { file, .. } | Self::Json { file, .. } | Self::Invalid { file, .. } => file,
@@ -183,6 +262,21 @@ impl fmt::Display for ProblemPrefix {
 ///
 /// `quat_xyzw` rotates the primitive's local frame into the world (order x, y, z, w; normalised
 /// on load). Serialises back to the file format (`"kind": "box" | "sphere" | "cylinder"`).
+///
+/// ```
+/// use hearth_planning::problem::ObstacleSpec;
+///
+/// let shelf = ObstacleSpec::Box {
+///     center: [0.8, 0.0, 0.5],
+///     half_extents: [0.2, 0.4, 0.01],
+///     quat_xyzw: [0.0, 0.0, 0.0, 1.0],
+///     name: Some("shelf".into()),
+/// };
+/// let json = serde_json::to_value(&shelf)?;
+/// assert_eq!(json["kind"], "box");
+/// assert_eq!(json["half_extents"][1], 0.4);
+/// # Ok::<(), serde_json::Error>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum ObstacleSpec {
@@ -225,7 +319,14 @@ pub enum ObstacleSpec {
 }
 
 impl ObstacleSpec {
-    /// `"box"`, `"sphere"` or `"cylinder"`.
+    /// `"box"`, `"sphere"` or `"cylinder"`: the file's `kind`.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ObstacleSpec;
+    ///
+    /// let ball = ObstacleSpec::Sphere { center: [0.0; 3], radius: 0.1, name: None };
+    /// assert_eq!(ball.kind(), "sphere");
+    /// ```
     pub fn kind(&self) -> &'static str {
         match self {
             Self::Box { .. } => "box",
@@ -235,13 +336,34 @@ impl ObstacleSpec {
     }
 
     /// The obstacle's name from the file, if any.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ObstacleSpec;
+    ///
+    /// let can = ObstacleSpec::Sphere { center: [0.0; 3], radius: 0.1, name: Some("Can1".into()) };
+    /// assert_eq!(can.name(), Some("Can1"));
+    /// assert_eq!(ObstacleSpec::Sphere { center: [0.0; 3], radius: 0.1, name: None }.name(), None);
+    /// ```
     pub fn name(&self) -> Option<&str> {
         match self {
             Self::Box { name, .. } | Self::Sphere { name, .. } | Self::Cylinder { name, .. } => name.as_deref(),
         }
     }
 
-    /// The primitive's centre.
+    /// The primitive's centre (for a cylinder, the mid-point of its axis).
+    ///
+    /// ```
+    /// use hearth_planning::problem::ObstacleSpec;
+    ///
+    /// let post = ObstacleSpec::Cylinder {
+    ///     center: [0.5, 0.0, 0.3],
+    ///     radius: 0.05,
+    ///     half_length: 0.3,
+    ///     quat_xyzw: [0.0, 0.0, 0.0, 1.0],
+    ///     name: None,
+    /// };
+    /// assert_eq!(post.center(), [0.5, 0.0, 0.3]);
+    /// ```
     pub fn center(&self) -> [f64; 3] {
         match self {
             Self::Box { center, .. } | Self::Sphere { center, .. } | Self::Cylinder { center, .. } => *center,
@@ -294,6 +416,18 @@ impl ObstacleSpec {
 
 /// One motion-planning query: obstacles, a start and goal configurations (in the set's
 /// `joint_names` order).
+///
+/// ```
+/// use hearth_planning::problem::ProblemSet;
+///
+/// let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/panda_table_pick.json"))?;
+/// let p = set.problem(1).unwrap();
+/// assert!(p.valid);
+/// assert_eq!(p.obstacles.len(), 12);
+/// assert_eq!(p.start.len(), set.joint_names.len());
+/// assert!(p.goals.iter().all(|g| g.len() == 7));
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Problem {
     /// The MBM problem index (1–100).
@@ -309,7 +443,25 @@ pub struct Problem {
 }
 
 impl Problem {
-    /// A [`ParryScene`] of the obstacles (margin 0), obstacle `i` as `ObstacleId(i)`.
+    /// A [`ParryScene`] of the obstacles (margin 0), obstacle `i` as `ObstacleId(i)`, named as
+    /// [`ObstacleSpec::to_obstacle`] names them.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{ObstacleId, Obstacles};
+    /// use hearth_planning::problem::ProblemSet;
+    /// use parry3d::math::Vector;
+    ///
+    /// let set = ProblemSet::from_json_str(r#"{"robot": "toy", "family": "f", "joint_names": ["j"],
+    ///   "problems": [{"id": 1, "start": [0], "goals": [[1]], "obstacles": [
+    ///     {"kind": "sphere", "center": [1, 0, 0], "radius": 0.2, "name": "ball"},
+    ///     {"kind": "cylinder", "center": [0, 1, 0.5], "radius": 0.1, "half_length": 0.5,
+    ///      "quat_xyzw": [0, 0, 0, 1]}]}]}"#)?;
+    /// let scene = set.problems[0].scene();
+    /// assert_eq!(scene.find("ball"), Some(ObstacleId(0)));
+    /// assert_eq!(scene.name(ObstacleId(1)), Some("cylinder1"));
+    /// assert!(scene.ball_hits(Vector::new(0.0, 1.0, 0.95), 0.01)); // the cylinder stands along z
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
     pub fn scene(&self) -> ParryScene {
         self.obstacles
             .iter()
@@ -320,6 +472,17 @@ impl Problem {
 }
 
 /// One problem file: a robot, a family (scene type) and its problems.
+///
+/// ```
+/// use hearth_planning::problem::ProblemSet;
+///
+/// let set = ProblemSet::from_json_str(r#"{"robot": "toy", "family": "open", "joint_names": ["a", "b"],
+///   "problems": [{"id": 1, "start": [0, 0], "goals": [[1, 1]]}, {"id": 2, "start": [1, 1], "goals": [[0, 0]]}]}"#)?;
+/// assert_eq!((set.robot.as_str(), set.family.as_str()), ("toy", "open"));
+/// assert_eq!(set.joint_names, ["a", "b"]);
+/// assert_eq!(set.problems.len(), 2);
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ProblemSet {
     /// Robot name (`panda`, `fetch`).
@@ -338,6 +501,16 @@ pub struct ProblemSet {
 impl ProblemSet {
     /// Reads and checks a problem file.
     ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/fetch_table_pick.json"))?;
+    /// assert_eq!((set.robot.as_str(), set.family.as_str()), ("fetch", "table_pick"));
+    /// assert_eq!(set.joint_names.len(), 8);
+    /// assert!(set.problem(7).is_some());
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`ProblemError`] naming `path` (and the problem id and field for a bad value).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ProblemError> {
@@ -346,7 +519,19 @@ impl ProblemSet {
         Self::parse(&text, path)
     }
 
-    /// Parses and checks a problem set from a JSON string (errors name the file `<string>`).
+    /// Parses and checks a problem set from a JSON string (errors name the file `<string>`). A
+    /// problem's `valid` defaults to `true` and its `obstacles` to none.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let set = ProblemSet::from_json_str(r#"{"robot": "toy", "family": "f", "joint_names": ["j"],
+    ///   "problems": [{"id": 3, "start": [0], "goals": [[1], [-1]]}]}"#)?;
+    /// let p = &set.problems[0];
+    /// assert!(p.valid && p.obstacles.is_empty());
+    /// assert_eq!(p.goals, [[1.0], [-1.0]]);
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
     ///
     /// # Errors
     /// As [`ProblemSet::load`].
@@ -384,6 +569,19 @@ impl ProblemSet {
     /// Re-checks a set built or edited in code (the same checks as loading; errors name the
     /// file `<memory>`).
     ///
+    /// ```
+    /// use std::path::Path;
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let mut set = ProblemSet::from_json_str(r#"{"robot": "toy", "family": "f", "joint_names": ["j"],
+    ///   "problems": [{"id": 3, "start": [0], "goals": [[1]]}]}"#)?;
+    /// assert!(set.validate().is_ok());
+    /// set.problems[0].start.push(0.5);
+    /// let e = set.validate().unwrap_err();
+    /// assert_eq!((e.file(), e.problem(), e.field()), (Path::new("<memory>"), Some(3), Some("start")));
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
+    ///
     /// # Errors
     /// The first bad field found.
     pub fn validate(&self) -> Result<(), ProblemError> {
@@ -408,18 +606,47 @@ impl ProblemSet {
         Ok(())
     }
 
-    /// Problems whose `valid` flag is set.
+    /// Problems whose `valid` flag is set, in file order.
+    ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/panda_table_pick.json"))?;
+    /// let ids: Vec<u32> = set.valid_problems().map(|p| p.id).collect();
+    /// assert_eq!(ids, [1]); // problem 41 is flagged invalid
+    /// assert_eq!(set.problems.len(), 2);
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
     pub fn valid_problems(&self) -> impl Iterator<Item = &Problem> {
         self.problems.iter().filter(|p| p.valid)
     }
 
-    /// The problem with this id.
+    /// The problem with this id (the first, should ids repeat).
+    ///
+    /// ```
+    /// use hearth_planning::problem::ProblemSet;
+    ///
+    /// let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/panda_table_pick.json"))?;
+    /// assert!(set.problem(41).is_some_and(|p| !p.valid));
+    /// assert!(set.problem(2).is_none());
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
     pub fn problem(&self, id: u32) -> Option<&Problem> {
         self.problems.iter().find(|p| p.id == id)
     }
 }
 
 /// Loads every `*.json` problem set in `dir` except [`JOINTS_FILE`], sorted by file name.
+///
+/// ```
+/// use hearth_planning::problem::load_dir;
+///
+/// let sets = load_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))?;
+/// let robots: Vec<&str> = sets.iter().map(|s| s.robot.as_str()).collect();
+/// assert_eq!(robots, ["fetch", "panda"]); // fetch_table_pick.json, panda_table_pick.json
+/// assert!(load_dir("/no/such/folder").is_err());
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 ///
 /// # Errors
 /// The first file that fails to load, or the folder cannot be read.
@@ -443,6 +670,16 @@ pub fn load_dir(dir: impl AsRef<Path>) -> Result<Vec<ProblemSet>, ProblemError> 
 }
 
 /// Position bounds (`lower`, `upper`) of the planned joints.
+///
+/// ```
+/// use hearth_planning::problem::JointsInfo;
+///
+/// let info = JointsInfo::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/joints.json"))?;
+/// let bounds = info.notes.mbm_model_bounds.unwrap();
+/// assert_eq!((bounds.lower.len(), bounds.upper.len()), (7, 7));
+/// assert!(bounds.upper[3] > info.upper[3]); // MBM lets the Panda's elbow straighten further
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Bounds {
     /// Lower bounds.
@@ -451,7 +688,18 @@ pub struct Bounds {
     pub upper: Vec<f64>,
 }
 
-/// The `notes` of a `joints.json`.
+/// The `notes` of a `joints.json`; every field may be absent.
+///
+/// ```
+/// use hearth_planning::problem::{JointsInfo, JointsNotes};
+///
+/// let info = JointsInfo::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/joints.json"))?;
+/// let pair = ["panda_hand".to_string(), "panda_leftfinger".to_string()];
+/// assert!(info.notes.self_collision_allowed_pairs.contains(&pair));
+/// assert_eq!(info.notes.mbm_finger_joint_positions, Some(vec![0.065, 0.065]));
+/// assert_eq!(serde_json::from_str::<JointsNotes>("{}").unwrap(), JointsNotes::default());
+/// # Ok::<(), hearth_planning::problem::ProblemError>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct JointsNotes {
     /// Link pairs allowed to touch (MBM's allowed-collision matrix).
@@ -508,6 +756,16 @@ pub struct JointsInfo {
 impl JointsInfo {
     /// Reads and checks a `joints.json`.
     ///
+    /// ```
+    /// use hearth_planning::problem::JointsInfo;
+    ///
+    /// let info = JointsInfo::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/joints.json"))?;
+    /// assert_eq!(info.joint_names[0], "panda_joint1");
+    /// assert_eq!((info.lower.len(), info.upper.len(), info.velocity.len()), (7, 7, 7));
+    /// assert!(info.acceleration.is_some() && info.jerk.is_some());
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`ProblemError`] naming the file and field (every limit list must match `joint_names`,
     /// be finite, and have `lower ≤ upper`).
@@ -518,6 +776,17 @@ impl JointsInfo {
     }
 
     /// Parses and checks a `joints.json` from a string (errors name the file `<string>`).
+    ///
+    /// ```
+    /// use hearth_planning::problem::{Defect, JointsInfo};
+    ///
+    /// let json = r#"{"robot": "toy", "joint_names": ["a", "b"],
+    ///   "lower": [-1, 2], "upper": [1, 1], "velocity": [1, 1]}"#;
+    /// let e = JointsInfo::from_json_str(json).unwrap_err();
+    /// assert_eq!(e.field(), Some("lower[1]"));
+    /// assert_eq!(e.defect(), Some(&Defect::InvertedLimits { lower: 2.0, upper: 1.0 }));
+    /// assert!(JointsInfo::from_json_str(&json.replace("[-1, 2]", "[-1, 0]")).is_ok());
+    /// ```
     ///
     /// # Errors
     /// As [`JointsInfo::load`].
@@ -567,7 +836,19 @@ impl JointsInfo {
     }
 
     /// The fixed finger positions MBM plans with (Panda `mbm_finger_joint_positions` or Fetch
-    /// `mbm_gripper_finger_positions`).
+    /// `mbm_gripper_finger_positions`), `None` when the notes give neither.
+    ///
+    /// ```
+    /// use hearth_planning::problem::JointsInfo;
+    ///
+    /// let fetch = JointsInfo::from_json_str(r#"{"robot": "fetch", "joint_names": ["j"], "lower": [-1], "upper": [1],
+    ///   "velocity": [1], "notes": {"mbm_gripper_finger_positions": [0.05, 0.05]}}"#)?;
+    /// assert_eq!(fetch.finger_positions(), Some(&[0.05, 0.05][..]));
+    /// let bare = JointsInfo::from_json_str(r#"{"robot": "toy", "joint_names": ["j"], "lower": [-1], "upper": [1],
+    ///   "velocity": [1]}"#)?;
+    /// assert_eq!(bare.finger_positions(), None);
+    /// # Ok::<(), hearth_planning::problem::ProblemError>(())
+    /// ```
     pub fn finger_positions(&self) -> Option<&[f64]> {
         self.notes
             .mbm_finger_joint_positions

@@ -60,6 +60,28 @@ const BYPASS_TRIES: usize = 64;
 const BYPASS_REACH: [f64; 2] = [0.005, 0.2];
 
 /// How long to shortcut and how carefully.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{self, ShortcutSettings};
+/// use hearth_planning::space::JointSpace;
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+/// let none = ShortcutSettings { attempts: 0, ..ShortcutSettings::default() };
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let (same, stats) = shortcut::random(&mut motion, &mut Free(0), &zigzag, &none, &mut rng);
+/// assert_eq!((same, stats.attempts), (zigzag, 0));
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShortcutSettings {
     /// Shortcut attempts (random pairs of points).
@@ -88,6 +110,29 @@ impl Default for ShortcutSettings {
 }
 
 /// What a shortcutter did.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{self, ShortcutSettings};
+/// use hearth_planning::space::JointSpace;
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+/// let settings = ShortcutSettings { attempts: 20, ..ShortcutSettings::default() };
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let (_, stats) = shortcut::random(&mut motion, &mut Free(0), &zigzag, &settings, &mut rng);
+/// assert!(stats.attempts <= 20 && stats.accepted <= stats.attempts);
+/// assert!(stats.accepted > 0);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ShortcutStats {
     /// Attempts made.
@@ -146,6 +191,31 @@ fn point_at<S: Space>(space: &S, states: &[Vec<f64>], acc: &[f64], u: f64) -> (u
 /// two of its states, half the time two points anywhere along it) by a straight edge when that
 /// edge is valid and shorter. Never lengthens the path; every new edge is checked by `motion`
 /// (and at the fine resolution when set).
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{self, ShortcutSettings};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::validity::StateValidator;
+/// use rand::SeedableRng;
+///
+/// // The square's lower right is blocked: paths go round its upper left corner.
+/// struct Block(u64);
+/// impl StateValidator for Block {
+///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; q[0] < 0.2 || q[1] > 0.8 }
+///     fn checks(&self) -> u64 { self.0 }
+/// }
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let corner = Path { states: vec![vec![0.0, 0.0], vec![0.0, 1.0], vec![1.0, 1.0]] };
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+/// let settings = ShortcutSettings::default();
+/// let (short, _) = shortcut::random(&mut motion, &mut Block(0), &corner, &settings, &mut rng);
+/// assert!(short.length(motion.space()) < corner.length(motion.space()));
+/// assert_eq!((short.states.first(), short.states.last()), (corner.states.first(), corner.states.last()));
+/// assert!(short.states.windows(2).all(|w| motion.check_motion(&mut Block(0), &w[0], &w[1])));
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
 pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     motion: &mut MotionValidator<S>,
     validator: &mut V,
@@ -223,6 +293,37 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 /// time-optimal ramp between the states (position and velocity) there within the velocity and
 /// acceleration limits (and position bounds) of `limits`, and splices it in when it is faster
 /// and collision-free. The duration never grows; the velocity stays continuous.
+///
+/// Fails only when `limits` do not have the trajectory's dimension.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{self, ShortcutSettings};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::trajectory::{Limits, Trajectory};
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![f64::INFINITY; 2])?;
+/// let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+/// let mut t = Trajectory::rest_to_rest(motion.space(), &zigzag, &limits)?;
+/// let before = t.duration();
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let settings = ShortcutSettings::default();
+/// let stats = shortcut::parabolic(&mut motion, &mut Free(0), &mut t, &limits, &settings, &mut rng)?;
+/// assert!(stats.accepted > 0 && t.duration() < before);
+/// let (mut q, mut v) = ([0.0; 2], [0.0; 2]);
+/// t.sample(t.duration(), &mut q, Some(&mut v));
+/// assert!(q[0].abs() < 1e-9 && (q[1] - 1.0).abs() < 1e-9 && v == [0.0; 2]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     motion: &mut MotionValidator<S>,
     validator: &mut V,
@@ -298,6 +399,34 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 /// an edge that fails is replaced by a BiRRT path between its ends planned at that resolution
 /// (within `budget` for all repairs together). Returns the path and the number of edges
 /// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut;
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::validity::StateValidator;
+/// use rand::SeedableRng;
+///
+/// // A wall 2 mm thick at x = 0.503, with a gap above y = 0.9.
+/// struct Thin(u64);
+/// impl StateValidator for Thin {
+///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; !(q[0] > 0.503 && q[0] < 0.505 && q[1] < 0.9) }
+///     fn checks(&self) -> u64 { self.0 }
+/// }
+/// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+/// let across = Path { states: vec![vec![0.1, 0.1], vec![0.9, 0.1]] };
+/// // Checked every centimetre, the edge misses the wall.
+/// let (a, b) = (&across.states[0], &across.states[1]);
+/// assert!(MotionValidator::new(space.clone(), 0.01).check_motion(&mut Thin(0), a, b));
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let budget = std::time::Duration::from_secs(1);
+/// let (fixed, repaired) = shortcut::repair(&space, &mut Thin(0), &across, 0.001, budget, &mut rng).unwrap();
+/// assert_eq!(repaired, 1);
+/// let mut fine = MotionValidator::new(space, 0.001);
+/// assert!(fixed.states.windows(2).all(|w| fine.check_motion(&mut Thin(0), &w[0], &w[1])));
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
 pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     space: &S,
     validator: &mut V,
@@ -414,7 +543,15 @@ fn bypass<S: Space, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     None
 }
 
-/// Which shortcutting [`smooth`] applies.
+/// Which shortcutting [`smooth`] applies; serde names are lowercase (`"none"`, `"random"`,
+/// `"parabolic"`).
+///
+/// ```
+/// use hearth_planning::shortcut::Smoothing;
+///
+/// assert_eq!(Smoothing::default(), Smoothing::Parabolic);
+/// assert_eq!(serde_json::from_str::<Smoothing>(r#""random""#).unwrap(), Smoothing::Random);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Smoothing {
@@ -427,7 +564,34 @@ pub enum Smoothing {
     Parabolic,
 }
 
-/// A post-processed path and its timing.
+/// A post-processed path and its timing: what [`smooth`] returns.
+///
+/// ```
+/// use hearth_planning::motion::MotionValidator;
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::shortcut::{smooth, ShortcutSettings, Smoothing};
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::trajectory::Limits;
+/// use rand::SeedableRng;
+/// # use hearth_planning::validity::StateValidator;
+/// # struct Free(u64);
+/// # impl StateValidator for Free {
+/// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+/// #     fn checks(&self) -> u64 { self.0 }
+/// # }
+/// // `Free` is a validator that accepts every state.
+/// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+/// let zigzag = Path { states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]] };
+/// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![f64::INFINITY; 2])?;
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let out = smooth(Smoothing::Random, &mut motion, &mut Free(0), &zigzag, &limits,
+///                  &ShortcutSettings::default(), std::time::Duration::from_millis(10), &mut rng)?;
+/// assert!(out.random.accepted > 0 && out.parabolic.attempts == 0);
+/// assert_eq!((out.repaired, out.fell_back), (0, false));
+/// // Random smoothing times the shortcut waypoints rest to rest: one span per edge.
+/// assert_eq!(out.trajectory.spans(), out.path.states.len() - 1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Smoothed {
     /// The time-parametrised motion.

@@ -13,10 +13,66 @@ use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
+///
+/// ```
+/// use hearth_planning::validity::StateValidator;
+///
+/// // Valid inside the unit disc; counts its checks.
+/// struct Disc(u64);
+/// impl StateValidator for Disc {
+///     fn is_valid(&mut self, q: &[f64]) -> bool {
+///         self.0 += 1;
+///         q[0].hypot(q[1]) < 1.0
+///     }
+///     fn checks(&self) -> u64 {
+///         self.0
+///     }
+/// }
+/// let mut disc = Disc(0);
+/// assert!(disc.is_valid(&[0.5, 0.5]) && !disc.is_valid(&[1.0, 1.0]));
+/// assert_eq!(disc.first_invalid(&[0.0, 0.0, 2.0, 0.0], 2), Some(1));
+/// assert_eq!(disc.checks(), 4);
+/// ```
 pub trait StateValidator {
     /// Whether `q` (a configuration of the planned space) is valid.
+    ///
+    /// ```
+    /// use hearth_planning::validity::StateValidator;
+    ///
+    /// // Valid while every coordinate stays below its cap.
+    /// struct Below(Vec<f64>, u64);
+    /// impl StateValidator for Below {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool {
+    ///         self.1 += 1;
+    ///         q.len() == self.0.len() && q.iter().zip(&self.0).all(|(v, cap)| v < cap)
+    ///     }
+    ///     fn checks(&self) -> u64 { self.1 }
+    /// }
+    /// let mut v = Below(vec![1.0, 2.0], 0);
+    /// assert!(v.is_valid(&[0.5, 1.5]));
+    /// assert!(!v.is_valid(&[0.5, 2.5]) && !v.is_valid(&[f64::NAN, 0.0]));
+    /// ```
     fn is_valid(&mut self, q: &[f64]) -> bool;
-    /// How many configurations have been checked so far.
+    /// How many configurations have been checked so far: planners report the difference over a
+    /// call as [`PlanStats::states_checked`](crate::planner::PlanStats::states_checked).
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::StateValidator;
+    ///
+    /// struct Free(u64);
+    /// impl StateValidator for Free {
+    ///     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+    ///     fn checks(&self) -> u64 { self.0 }
+    /// }
+    /// let mut free = Free(0);
+    /// free.is_valid(&[0.0]);
+    /// let mut mv = MotionValidator::new(JointSpace::new(&[0.0], &[1.0], &[false])?, 0.25);
+    /// mv.check_motion(&mut free, &[0.0], &[1.0]); // the three states between the ends
+    /// assert_eq!(free.checks(), 4);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn checks(&self) -> u64;
 
     /// Checks the states in `states` (`dim` values each, one after another) in order and
@@ -42,7 +98,17 @@ pub trait StateValidator {
     }
 }
 
-/// What makes a configuration invalid, with names for messages.
+/// What makes a configuration invalid, with names for messages
+/// ([`RobotValidity::explain`]).
+///
+/// ```
+/// use hearth_planning::validity::Contact;
+///
+/// let c = Contact::Obstacle { link: "panda_hand".into(), obstacle: "shelf".into() };
+/// assert_eq!(c.to_string(), "link `panda_hand` touches obstacle `shelf`");
+/// let s = Contact::SelfCollision { a: "panda_link2".into(), b: "panda_hand".into() };
+/// assert_eq!(s.to_string(), "link `panda_link2` touches link `panda_hand`");
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Contact {
     /// Two robot links (or an attached object, named `attached:NAME`) touch.
@@ -70,7 +136,37 @@ impl std::fmt::Display for Contact {
     }
 }
 
-/// An object held by the robot: it moves rigidly with `link` and is checked like a link.
+/// An object held by the robot: it moves rigidly with `link` and is checked like a link
+/// ([`RobotValidity::attach`]).
+///
+/// ```
+/// use hearth_planning::kinematics::nalgebra::Isometry3;
+/// use hearth_planning::obstacles::{Obstacle, ParryScene};
+/// use hearth_planning::validity::{Attached, Contact, RobotValidity};
+/// use parry3d::math::{Pose, Vector};
+/// use parry3d::shape::SharedShape;
+/// # use std::sync::Arc;
+/// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+/// # let panda = RobotModel::builtin("panda").unwrap();
+/// # let arm = Chain::named(&panda, "arm").unwrap();
+/// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+///
+/// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+/// // A 50 cm rod held in the hand, pointing down at a low table.
+/// let rod = Attached {
+///     name: "rod".into(),
+///     link: panda.link_index("panda_hand")?,
+///     offset: Isometry3::translation(0.0, 0.0, 0.25),
+///     shape: SharedShape::cuboid(0.01, 0.01, 0.25),
+/// };
+/// let table = Obstacle::cuboid("table", Pose::translation(0.3, 0.0, 0.15), Vector::new(0.2, 0.2, 0.05));
+/// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table])));
+/// v.attach(rod);
+/// let over_table = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+/// let hit = Contact::Obstacle { link: "attached:rod".into(), obstacle: "table".into() };
+/// assert_eq!(v.explain(&over_table), Some(hit));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone)]
 pub struct Attached {
     /// Name used in messages.
@@ -420,6 +516,22 @@ impl RobotValidity {
     /// A checker for `chain`'s configurations. Joints outside the chain keep the model's
     /// neutral configuration (see [`RobotValidity::set_reference`]); the robot root sits at
     /// the world origin (see [`RobotValidity::set_base`]).
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{RobotValidity, StateValidator};
+    /// use parry3d::math::Vector;
+    ///
+    /// let panda = RobotModel::builtin("panda")?;
+    /// let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    /// let lamp = Obstacle::ball("lamp", Vector::new(0.0, 0.0, 1.2), 0.1); // above the robot's root
+    /// let mut v = RobotValidity::new(Chain::named(&panda, "arm")?, acm, Arc::new(ParryScene::new(vec![lamp])));
+    /// assert!(v.is_valid(&[0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])); // folded
+    /// assert!(!v.is_valid(&[0.0, 0.0, 0.0, -0.1, 0.0, 3.0, 0.0])); // stretched up into the lamp
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn new(chain: Chain, matrix: SelfCollisionMatrix, obstacles: Arc<dyn Obstacles>) -> Self {
         let model = chain.model().clone();
         let geometric: Vec<usize> = (0..model.links().len())
@@ -466,12 +578,48 @@ impl RobotValidity {
         }
     }
 
-    /// The chain being planned.
+    /// The chain being planned: its configurations are what [`StateValidator::is_valid`] takes.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::ParryScene;
+    /// use hearth_planning::validity::RobotValidity;
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
+    /// assert_eq!(v.chain().dof(), 7);
+    /// ```
     pub fn chain(&self) -> &Chain {
         &self.chain
     }
 
     /// Sets the full configuration that joints outside the chain keep (fingers, head, …).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::ParryScene;
+    /// use hearth_planning::validity::RobotValidity;
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
+    /// let mut q_full = panda.neutral_configuration(); // seven arm joints, then the fingers
+    /// q_full[7] = 0.04; // fingers open 4 cm each side
+    /// v.set_reference(&q_full)?;
+    /// assert!(v.set_reference(&[0.0; 3]).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// The model's error for a configuration of the wrong length or outside the joint limits;
+    /// the reference is then unchanged.
     pub fn set_reference(&mut self, q_full: &[f64]) -> Result<(), hearth_kinematics::KinematicsError> {
         self.model.check_configuration(q_full)?;
         self.q_full.copy_from_slice(q_full);
@@ -484,12 +632,52 @@ impl RobotValidity {
     /// Replaces the obstacles (e.g. a fresh view of a world that has moved on). The obstacles a
     /// validator holds must not change their answers while it holds them: links that do not
     /// move with the chain are checked once per reference, base and obstacle set.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{RobotValidity, StateValidator};
+    /// use parry3d::math::{Pose, Vector};
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
+    /// let reaching = [0.0, 1.2, 0.0, -0.3, 0.0, 1.5, 0.785];
+    /// assert!(v.is_valid(&reaching));
+    /// let wall = Obstacle::cuboid("wall", Pose::translation(0.45, 0.0, 0.5), Vector::new(0.02, 1.0, 1.0));
+    /// v.set_obstacles(Arc::new(ParryScene::new(vec![wall])));
+    /// assert!(!v.is_valid(&reaching));
+    /// ```
     pub fn set_obstacles(&mut self, obstacles: Arc<dyn Obstacles>) {
         self.obstacles = obstacles;
         self.fixed_clear = None;
     }
 
     /// Places the robot root in the world (e.g. a mobile base pose).
+    ///
+    /// ```
+    /// use hearth_planning::kinematics::nalgebra::Isometry3;
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{RobotValidity, StateValidator};
+    /// use parry3d::math::{Pose, Vector};
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// // A pillar standing where the robot's root is.
+    /// let pillar = Obstacle::cuboid("pillar", Pose::translation(0.0, 0.0, 0.5), Vector::new(0.1, 0.1, 0.5));
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![pillar])));
+    /// let folded = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+    /// assert!(!v.is_valid(&folded));
+    /// v.set_base(Isometry3::translation(2.0, 0.0, 0.0));
+    /// assert!(v.is_valid(&folded));
+    /// ```
     pub fn set_base(&mut self, base: Isometry3<f64>) {
         self.base = base;
         self.fixed_clear = None;
@@ -499,6 +687,31 @@ impl RobotValidity {
 
     /// Attaches an object (a held object moves with the gripper). It is checked against the
     /// obstacles and against every link except `link` and links adjacent to it.
+    ///
+    /// ```
+    /// use hearth_planning::kinematics::nalgebra::Isometry3;
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{Attached, RobotValidity, StateValidator};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::SharedShape;
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let table = Obstacle::cuboid("table", Pose::translation(0.3, 0.0, 0.15), Vector::new(0.2, 0.2, 0.05));
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table])));
+    /// let over_table = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+    /// assert!(v.is_valid(&over_table));
+    /// // A 50 cm rod held in the hand reaches down into the table.
+    /// let hand = panda.link_index("panda_hand")?;
+    /// let shape = SharedShape::cuboid(0.01, 0.01, 0.25);
+    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape });
+    /// assert!(!v.is_valid(&over_table));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn attach(&mut self, object: Attached) {
         let link = object.link;
         self.attached.push(object);
@@ -511,6 +724,31 @@ impl RobotValidity {
     }
 
     /// Removes every attached object.
+    ///
+    /// ```
+    /// use hearth_planning::kinematics::nalgebra::Isometry3;
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{Attached, RobotValidity, StateValidator};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::SharedShape;
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let table = Obstacle::cuboid("table", Pose::translation(0.3, 0.0, 0.15), Vector::new(0.2, 0.2, 0.05));
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table])));
+    /// let hand = panda.link_index("panda_hand")?;
+    /// let shape = SharedShape::cuboid(0.01, 0.01, 0.25); // a 50 cm rod
+    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape });
+    /// let over_table = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+    /// assert!(!v.is_valid(&over_table));
+    /// v.detach_all();
+    /// assert!(v.is_valid(&over_table));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn detach_all(&mut self) {
         self.attached.clear();
     }
@@ -924,7 +1162,7 @@ impl RobotValidity {
     /// let arm = Chain::named(&panda, "arm").unwrap();
     /// let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
     /// let v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
-    /// let took = v.warm_pair_tables(2_000, 7);
+    /// let took = v.warm_pair_tables(100, 7);
     /// assert!(took.as_secs_f64() < 60.0);
     /// ```
     pub fn warm_pair_tables(&self, samples: usize, seed: u64) -> std::time::Duration {
@@ -953,6 +1191,25 @@ impl RobotValidity {
     /// The reference check without any broad phase (every link against the obstacles, every
     /// checked pair with the exact test). Same answer as [`StateValidator::is_valid`], slower;
     /// for tests and benchmarks. Does not count as a check.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{RobotValidity, StateValidator};
+    /// use parry3d::math::{Pose, Vector};
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let wall = Obstacle::cuboid("wall", Pose::translation(0.45, 0.0, 0.5), Vector::new(0.02, 1.0, 1.0));
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![wall])));
+    /// for q in [[0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785], [0.0, 1.2, 0.0, -0.3, 0.0, 1.5, 0.785]] {
+    ///     assert_eq!(v.is_valid_exact(&q), v.is_valid(&q));
+    /// }
+    /// assert_eq!(v.checks(), 2);
+    /// ```
     pub fn is_valid_exact(&mut self, q: &[f64]) -> bool {
         if !q.iter().all(|v| v.is_finite()) || !self.update_poses(q) {
             return false;
@@ -999,6 +1256,27 @@ impl RobotValidity {
 
     /// Why `q` is invalid (the first contact found), or `None` if it is valid. Wrong-length or
     /// non-finite input reports no contact; check it with [`Chain::check`] first.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::{Contact, RobotValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let wall = Obstacle::cuboid("wall", Pose::translation(0.45, 0.0, 0.5), Vector::new(0.02, 1.0, 1.0));
+    /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![wall])));
+    /// assert_eq!(v.explain(&[0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]), None);
+    /// match v.explain(&[0.0, 1.2, 0.0, -0.3, 0.0, 1.5, 0.785]) {
+    ///     Some(Contact::Obstacle { link, obstacle }) => assert!(link.starts_with("panda_") && obstacle == "wall"),
+    ///     other => panic!("expected the wall, got {other:?}"),
+    /// }
+    /// assert_eq!(v.explain(&[f64::NAN; 7]), None);
+    /// ```
     pub fn explain(&mut self, q: &[f64]) -> Option<Contact> {
         if !self.update_poses(q) {
             return None;

@@ -37,9 +37,29 @@ impl Default for BallBatch {
 
 impl BallBatch {
     /// Most balls one batch holds (one bit each in the answer).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// for _ in 0..BallBatch::CAPACITY {
+    ///     assert!(balls.push(Vector::ZERO, 0.1));
+    /// }
+    /// assert!(!balls.push(Vector::ZERO, 0.1));
+    /// assert_eq!(balls.mask(), u64::MAX);
+    /// ```
     pub const CAPACITY: usize = 64;
 
-    /// An empty batch.
+    /// An empty batch (the same as [`BallBatch::default`]).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    ///
+    /// let balls = BallBatch::new();
+    /// assert!(balls.is_empty());
+    /// assert_eq!(balls.mask(), 0);
+    /// ```
     pub fn new() -> Self {
         Self {
             x: [0.0; Self::CAPACITY],
@@ -50,12 +70,32 @@ impl BallBatch {
         }
     }
 
-    /// Empties the batch.
+    /// Empties the batch, so that it can be filled again without allocating.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// balls.push(Vector::ZERO, 0.1);
+    /// balls.clear();
+    /// assert!(balls.is_empty());
+    /// ```
     pub fn clear(&mut self) {
         self.len = 0;
     }
 
-    /// Adds a ball; `false` (and nothing added) when the batch is full.
+    /// Adds a ball as ball number [`BallBatch::len`]; `false` (and nothing added) when the batch
+    /// is full.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// assert!(balls.push(Vector::new(1.0, 2.0, 3.0), 0.5));
+    /// assert_eq!(balls.ball(0), (Vector::new(1.0, 2.0, 3.0), 0.5));
+    /// ```
     pub fn push(&mut self, center: Vector, radius: Real) -> bool {
         if self.len == Self::CAPACITY {
             return false;
@@ -67,21 +107,63 @@ impl BallBatch {
     }
 
     /// How many balls the batch holds.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// balls.push(Vector::ZERO, 0.1);
+    /// balls.push(Vector::X, 0.1);
+    /// assert_eq!(balls.len(), 2);
+    /// ```
     pub fn len(&self) -> usize {
         self.len
     }
 
     /// Whether the batch holds no ball.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// assert!(balls.is_empty());
+    /// balls.push(Vector::ZERO, 0.1);
+    /// assert!(!balls.is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
-    /// Centre and radius of ball `i` (`i < len`).
+    /// Centre and radius of ball `i` (`i < len`; slots past `len` hold stale values, and `i` ≥
+    /// [`BallBatch::CAPACITY`] panics).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// balls.push(Vector::ZERO, 0.1);
+    /// balls.push(Vector::new(0.0, 0.0, 1.0), 0.2);
+    /// assert_eq!(balls.ball(1), (Vector::new(0.0, 0.0, 1.0), 0.2));
+    /// ```
     pub fn ball(&self, i: usize) -> (Vector, Real) {
         (Vector::new(self.x[i], self.y[i], self.z[i]), self.r[i])
     }
 
-    /// A mask with one bit per ball held.
+    /// A mask with one bit per ball held: bits `0..len` set, the others clear.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// for _ in 0..3 {
+    ///     balls.push(Vector::ZERO, 0.1);
+    /// }
+    /// assert_eq!(balls.mask(), 0b111);
+    /// ```
     pub fn mask(&self) -> u64 {
         if self.len == Self::CAPACITY {
             u64::MAX

@@ -112,6 +112,14 @@ pub struct ObstacleId(pub u32);
 
 impl ObstacleId {
     /// The id as a `usize` index.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("a", Vector::ZERO, 0.1), Obstacle::ball("b", Vector::X, 0.1)]);
+    /// assert_eq!(scene.obstacles()[ObstacleId(1).index()].name, "b");
+    /// ```
     #[inline]
     pub fn index(self) -> usize {
         self.0 as usize
@@ -133,13 +141,73 @@ impl fmt::Display for ObstacleId {
 /// An implementation may apply its own safety margin to [`Obstacles::intersects`] /
 /// [`Obstacles::first_hit`] (see [`ParryScene::with_margin`]); [`Obstacles::distance`] and
 /// [`Obstacles::cast_ray`] are always exact geometry.
+///
+/// An implementation provides five queries; the ball queries have defaults built on
+/// [`Obstacles::first_hit`]:
+///
+/// ```
+/// use hearth_planning::obstacles::{ObstacleId, Obstacles};
+/// use parry3d::bounding_volume::Aabb;
+/// use parry3d::math::{Pose, Real, Vector};
+/// use parry3d::shape::Shape;
+///
+/// // The ground: a slab whose top face is z = 0, wide and deep enough to stand for z ≤ 0.
+/// struct Ground;
+/// impl Obstacles for Ground {
+///     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {
+///         (shape.compute_aabb(pose).mins.z <= 0.0).then_some(ObstacleId(0))
+///     }
+///     fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)> {
+///         let d = shape.compute_aabb(pose).mins.z.max(0.0);
+///         (d <= max_dist).then_some((d, ObstacleId(0)))
+///     }
+///     fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)> {
+///         let t = if origin.z <= 0.0 { 0.0 } else { -origin.z / dir.z };
+///         (0.0..=max_toi).contains(&t).then_some((t, ObstacleId(0)))
+///     }
+///     fn aabb(&self) -> Option<Aabb> {
+///         Some(Aabb::new(Vector::new(-1e3, -1e3, -1e3), Vector::new(1e3, 1e3, 0.0)))
+///     }
+///     fn name(&self, id: ObstacleId) -> Option<&str> {
+///         (id == ObstacleId(0)).then_some("ground")
+///     }
+/// }
+/// assert!(Ground.ball_hits(Vector::new(0.0, 0.0, 0.05), 0.1));
+/// assert!(!Ground.ball_hits(Vector::new(0.0, 0.0, 0.15), 0.1));
+/// assert_eq!(Ground.cast_ray(Vector::new(0.0, 0.0, 2.0), -Vector::Z, 10.0), Some((2.0, ObstacleId(0))));
+/// ```
 pub trait Obstacles: Send + Sync {
     /// The first obstacle found that `shape` placed at `pose` touches (or comes within the
     /// implementation's margin of), or `None` if it is collision-free. Which obstacle is
     /// reported when several are touched is unspecified; use it for error messages.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::Ball;
+    ///
+    /// let scene = ParryScene::new(vec![
+    ///     Obstacle::ball("lamp", Vector::new(0.0, 0.0, 1.0), 0.1),
+    ///     Obstacle::cuboid("wall", Pose::translation(1.0, 0.0, 0.5), Vector::new(0.05, 1.0, 0.5)),
+    /// ]);
+    /// let probe = Ball::new(0.1);
+    /// assert_eq!(scene.first_hit(&probe, &Pose::translation(0.9, 0.0, 0.5)), scene.find("wall"));
+    /// assert_eq!(scene.first_hit(&probe, &Pose::translation(0.5, 0.0, 0.5)), None);
+    /// ```
     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId>;
 
     /// Does `shape` placed at `pose` touch anything? Equivalent to `first_hit(..).is_some()`.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::Cuboid;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("ball", Vector::ZERO, 0.5)]);
+    /// let cube = Cuboid::new(Vector::splat(0.1));
+    /// assert!(scene.intersects(&cube, &Pose::translation(0.55, 0.0, 0.0)));
+    /// assert!(!scene.intersects(&cube, &Pose::translation(0.65, 0.0, 0.0)));
+    /// ```
     fn intersects(&self, shape: &dyn Shape, pose: &Pose) -> bool {
         self.first_hit(shape, pose).is_some()
     }
@@ -148,6 +216,18 @@ pub trait Obstacles: Send + Sync {
     /// of every state check asks this many times; implementations may answer it faster than
     /// [`Obstacles::intersects`] with a [`Ball`](parry3d::shape::Ball), and must give the same
     /// answer.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::Ball;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::cuboid("box", Pose::IDENTITY, Vector::splat(0.5))]);
+    /// let near = Vector::new(0.0, 0.0, 0.63); // 3 cm of clearance for a 10 cm ball
+    /// assert!(!scene.ball_hits(near, 0.1));
+    /// assert!(scene.clone().with_margin(0.05).ball_hits(near, 0.1));
+    /// assert_eq!(scene.ball_hits(near, 0.1), scene.intersects(&Ball::new(0.1), &Pose::from_translation(near)));
+    /// ```
     fn ball_hits(&self, center: Vector, radius: Real) -> bool {
         self.intersects(&parry3d::shape::Ball::new(radius), &Pose::from_translation(center))
     }
@@ -155,6 +235,22 @@ pub trait Obstacles: Send + Sync {
     /// Which balls of `balls` touch anything (within the margin): bit `i` of the answer is
     /// [`Obstacles::ball_hits`] for ball `i`. Implementations may test the balls together
     /// (the default asks about them one by one) and must give the same answer.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{BallBatch, Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("ball", Vector::ZERO, 0.5)]);
+    /// let mut balls = BallBatch::new();
+    /// for x in [0.0, 1.0, 0.55, 2.0] {
+    ///     balls.push(Vector::new(x, 0.0, 0.0), 0.1);
+    /// }
+    /// assert_eq!(scene.balls_touching(&balls), 0b0101);
+    /// for i in 0..balls.len() {
+    ///     let (c, r) = balls.ball(i);
+    ///     assert_eq!(scene.balls_touching(&balls) >> i & 1 == 1, scene.ball_hits(c, r));
+    /// }
+    /// ```
     fn balls_touching(&self, balls: &BallBatch) -> u64 {
         balls_one_by_one(self, balls)
     }
@@ -162,16 +258,65 @@ pub trait Obstacles: Send + Sync {
     /// The smallest distance from `shape` at `pose` to any obstacle, and which obstacle, if it
     /// is at most `max_dist` (0 when touching or penetrating). `None` when nothing lies within
     /// `max_dist`.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::Ball;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("ball", Vector::ZERO, 0.5)]).with_margin(0.1);
+    /// let probe = Ball::new(0.1);
+    /// let (d, id) = scene.distance(&probe, &Pose::translation(1.0, 0.0, 0.0), 1.0).unwrap();
+    /// assert!((d - 0.4).abs() < 1e-6 && id == ObstacleId(0)); // the margin plays no part
+    /// assert_eq!(scene.distance(&probe, &Pose::translation(1.0, 0.0, 0.0), 0.3), None);
+    /// assert_eq!(scene.distance(&probe, &Pose::IDENTITY, 1.0), Some((0.0, ObstacleId(0))));
+    /// ```
     fn distance(&self, shape: &dyn Shape, pose: &Pose, max_dist: Real) -> Option<(Real, ObstacleId)>;
 
     /// Casts the ray `origin + t·dir`, `0 ≤ t ≤ max_toi`, and returns the smallest `t` at which
     /// it hits an obstacle (in units of `|dir|`; 0 if `origin` is inside one) and which one.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let wall = Obstacle::cuboid("wall", Pose::translation(2.0, 0.0, 0.0), Vector::splat(0.5));
+    /// let scene = ParryScene::new(vec![wall]);
+    /// let (t, _) = scene.cast_ray(Vector::ZERO, Vector::X, 10.0).unwrap();
+    /// assert!((t - 1.5).abs() < 1e-6);
+    /// let (t, _) = scene.cast_ray(Vector::ZERO, 2.0 * Vector::X, 10.0).unwrap();
+    /// assert!((t - 0.75).abs() < 1e-6); // in units of |dir|
+    /// assert!(scene.cast_ray(Vector::ZERO, Vector::X, 1.0).is_none()); // too short
+    /// assert_eq!(scene.cast_ray(Vector::new(2.0, 0.0, 0.0), Vector::Y, 1.0).map(|(t, _)| t), Some(0.0));
+    /// ```
     fn cast_ray(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<(Real, ObstacleId)>;
 
     /// World-space bounds of all obstacles, `None` when there are none.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![
+    ///     Obstacle::ball("a", Vector::new(-1.0, 0.0, 0.0), 0.5),
+    ///     Obstacle::ball("b", Vector::new(2.0, 0.0, 1.0), 0.5),
+    /// ]);
+    /// let bounds = scene.aabb().unwrap();
+    /// assert_eq!((bounds.mins.x, bounds.maxs.x, bounds.maxs.z), (-1.5, 2.5, 1.5));
+    /// assert!(ParryScene::new(vec![]).aabb().is_none());
+    /// ```
     fn aabb(&self) -> Option<Aabb>;
 
     /// The obstacle's name, for messages; `None` for an unknown id.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("lamp", Vector::ZERO, 0.1)]);
+    /// assert_eq!(scene.name(ObstacleId(0)), Some("lamp"));
+    /// assert_eq!(scene.name(ObstacleId(1)), None);
+    /// ```
     fn name(&self, id: ObstacleId) -> Option<&str>;
 }
 
@@ -209,6 +354,16 @@ pub struct Obstacle {
 
 impl Obstacle {
     /// An obstacle from any parry shape.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::Obstacle;
+    /// use parry3d::math::Pose;
+    /// use parry3d::shape::SharedShape;
+    ///
+    /// let post = Obstacle::new("post", SharedShape::cuboid(0.05, 0.05, 0.5), Pose::translation(1.0, 0.0, 0.5));
+    /// assert_eq!(post.name, "post");
+    /// assert_eq!((post.aabb().mins.z, post.aabb().maxs.z), (0.0, 1.0));
+    /// ```
     pub fn new(name: impl Into<String>, shape: SharedShape, pose: Pose) -> Self {
         Self {
             name: name.into(),
@@ -218,6 +373,16 @@ impl Obstacle {
     }
 
     /// A box centred at `pose` with the given half-extents along its local axes.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::Obstacle;
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let table = Obstacle::cuboid("table", Pose::translation(0.5, 0.0, 0.4), Vector::new(0.3, 0.6, 0.02));
+    /// let aabb = table.aabb();
+    /// assert!((aabb.maxs.x - 0.8).abs() < 1e-6 && (aabb.mins.y + 0.6).abs() < 1e-6);
+    /// assert!((aabb.maxs.z - 0.42).abs() < 1e-6);
+    /// ```
     pub fn cuboid(name: impl Into<String>, pose: Pose, half_extents: Vector) -> Self {
         Self::new(
             name,
@@ -226,13 +391,33 @@ impl Obstacle {
         )
     }
 
-    /// A sphere.
+    /// A sphere of `radius` centred at `center`.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::Obstacle;
+    /// use parry3d::math::Vector;
+    ///
+    /// let ball = Obstacle::ball("ball", Vector::new(0.0, 0.0, 1.0), 0.25);
+    /// assert_eq!(ball.pose.translation, Vector::new(0.0, 0.0, 1.0));
+    /// assert_eq!(ball.aabb().mins, Vector::new(-0.25, -0.25, 0.75));
+    /// ```
     pub fn ball(name: impl Into<String>, center: Vector, radius: Real) -> Self {
         Self::new(name, SharedShape::ball(radius), Pose::from_translation(center))
     }
 
     /// A flat-capped cylinder centred at `pose` whose axis is `pose`'s **local z axis**, spanning
     /// `±half_length` along it (parry's cylinder axis is y; the rotation is applied here).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::Obstacle;
+    /// use parry3d::math::{Pose, Rotation, Vector};
+    ///
+    /// // Laid along the world x axis: local z turned a quarter turn about y.
+    /// let lying = Pose::from_parts(Vector::ZERO, Rotation::from_rotation_y(std::f32::consts::FRAC_PI_2));
+    /// let pipe = Obstacle::cylinder("pipe", lying, 0.5, 0.05);
+    /// let aabb = pipe.aabb();
+    /// assert!((aabb.maxs.x - 0.5).abs() < 1e-5 && (aabb.maxs.z - 0.05).abs() < 1e-5);
+    /// ```
     pub fn cylinder(name: impl Into<String>, pose: Pose, half_length: Real, radius: Real) -> Self {
         // R_x(+90°) maps local y (parry's axis) onto local z.
         let y_to_z = Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2);
@@ -240,12 +425,34 @@ impl Obstacle {
     }
 
     /// A capsule (segment `a`–`b` in world coordinates, swept by a ball of `radius`).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let rail = Obstacle::capsule("rail", Vector::ZERO, Vector::new(1.0, 0.0, 0.0), 0.05);
+    /// let scene = ParryScene::new(vec![rail]);
+    /// assert!(scene.ball_hits(Vector::new(0.5, 0.0, 0.1), 0.06));
+    /// assert!(!scene.ball_hits(Vector::new(1.2, 0.0, 0.0), 0.1));
+    /// ```
     pub fn capsule(name: impl Into<String>, a: Vector, b: Vector, radius: Real) -> Self {
         Self::new(name, SharedShape::capsule(a, b, radius), Pose::IDENTITY)
     }
 
     /// The convex hull of `points` (given in the obstacle frame) at `pose`; `None` when parry
     /// cannot build it (e.g. no points).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let corners = [Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
+    /// let wedge = Obstacle::convex_hull("wedge", Pose::IDENTITY, &corners).unwrap();
+    /// let scene = ParryScene::new(vec![wedge]);
+    /// assert!(scene.ball_hits(Vector::splat(0.2), 0.01)); // solid inside
+    /// assert!(!scene.ball_hits(Vector::splat(0.6), 0.01));
+    /// assert!(Obstacle::convex_hull("nothing", Pose::IDENTITY, &[]).is_none());
+    /// ```
     pub fn convex_hull(name: impl Into<String>, pose: Pose, points: &[Vector]) -> Option<Self> {
         SharedShape::convex_hull(points).map(|s| Self::new(name, s, pose))
     }
@@ -253,6 +460,20 @@ impl Obstacle {
     /// A triangle mesh at `pose`. Triangle meshes are **hollow** for intersection tests: a shape
     /// entirely inside a closed mesh does not touch it (use a convex hull or decomposition for
     /// solid obstacles).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let corners = vec![Vector::ZERO, Vector::X, Vector::Y, Vector::Z];
+    /// let faces = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+    /// let shell = Obstacle::trimesh("shell", Pose::IDENTITY, corners, faces)?;
+    /// let scene = ParryScene::new(vec![shell]);
+    /// assert!(!scene.ball_hits(Vector::splat(0.2), 0.01)); // hollow: inside touches nothing
+    /// assert!(scene.ball_hits(Vector::new(0.2, 0.2, 0.0), 0.01)); // on a face
+    /// assert!(Obstacle::trimesh("empty", Pose::IDENTITY, vec![], vec![]).is_err());
+    /// # Ok::<(), parry3d::shape::TriMeshBuilderError>(())
+    /// ```
     ///
     /// # Errors
     /// parry's [`TriMeshBuilderError`] for an empty or invalid mesh.
@@ -266,6 +487,16 @@ impl Obstacle {
     }
 
     /// The obstacle's world-space bounding box.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::Obstacle;
+    /// use parry3d::math::{Pose, Rotation, Vector};
+    ///
+    /// // A unit cube turned 45° about z is √2 wide along x and y.
+    /// let turned = Pose::from_parts(Vector::ZERO, Rotation::from_rotation_z(std::f32::consts::FRAC_PI_4));
+    /// let aabb = Obstacle::cuboid("cube", turned, Vector::splat(0.5)).aabb();
+    /// assert!((aabb.maxs.x - 0.5 * 2f32.sqrt()).abs() < 1e-5 && (aabb.maxs.z - 0.5).abs() < 1e-6);
+    /// ```
     pub fn aabb(&self) -> Aabb {
         self.shape.compute_aabb(&self.pose)
     }

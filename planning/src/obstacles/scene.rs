@@ -63,6 +63,18 @@ pub struct ParryScene {
 
 impl ParryScene {
     /// Builds the scene and its BVH. Obstacle `i` gets [`ObstacleId`]`(i)`.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let scene = ParryScene::new(vec![
+    ///     Obstacle::ball("ball", Vector::new(0.0, 0.0, 1.0), 0.1),
+    ///     Obstacle::cuboid("floor", Pose::translation(0.0, 0.0, -0.05), Vector::new(2.0, 2.0, 0.05)),
+    /// ]);
+    /// assert_eq!(scene.name(ObstacleId(1)), Some("floor"));
+    /// assert!(scene.ball_hits(Vector::new(1.0, 1.0, 0.05), 0.1));
+    /// ```
     pub fn new(obstacles: Vec<Obstacle>) -> Self {
         let aabbs: Vec<Aabb> = obstacles.iter().map(Obstacle::aabb).collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
@@ -80,12 +92,33 @@ impl ParryScene {
     }
 
     /// Sets the collision margin (see the type's docs). Negative or non-finite values count as 0.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let ball = || vec![Obstacle::ball("ball", Vector::ZERO, 0.5)];
+    /// let near = Vector::new(0.65, 0.0, 0.0); // 5 cm from the ball's surface
+    /// assert!(!ParryScene::new(ball()).ball_hits(near, 0.1));
+    /// assert!(ParryScene::new(ball()).with_margin(0.06).ball_hits(near, 0.1));
+    /// assert_eq!(ParryScene::new(ball()).with_margin(-1.0).margin(), 0.0);
+    /// ```
     pub fn with_margin(mut self, margin: Real) -> Self {
         self.set_margin(margin);
         self
     }
 
     /// Sets the collision margin in place. Negative or non-finite values count as 0.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::ParryScene;
+    ///
+    /// let mut scene = ParryScene::new(vec![]);
+    /// scene.set_margin(0.01);
+    /// assert_eq!(scene.margin(), 0.01);
+    /// scene.set_margin(f32::NAN);
+    /// assert_eq!(scene.margin(), 0.0);
+    /// ```
     pub fn set_margin(&mut self, margin: Real) {
         self.margin = if margin.is_finite() && margin > 0.0 {
             margin
@@ -94,22 +127,61 @@ impl ParryScene {
         };
     }
 
-    /// The collision margin applied by `intersects` / `first_hit`.
+    /// The collision margin applied by `intersects` / `first_hit` (0 unless set).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::ParryScene;
+    ///
+    /// assert_eq!(ParryScene::new(vec![]).margin(), 0.0);
+    /// assert_eq!(ParryScene::new(vec![]).with_margin(0.02).margin(), 0.02);
+    /// ```
     pub fn margin(&self) -> Real {
         self.margin
     }
 
     /// All obstacles, indexed by [`ObstacleId`].
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("a", Vector::ZERO, 0.1), Obstacle::ball("b", Vector::X, 0.2)]);
+    /// let names: Vec<&str> = scene.obstacles().iter().map(|o| o.name.as_str()).collect();
+    /// assert_eq!(names, ["a", "b"]);
+    /// ```
     pub fn obstacles(&self) -> &[Obstacle] {
         &self.obstacles
     }
 
-    /// The obstacle with this id.
+    /// The obstacle with this id, `None` for an id past the end.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("ball", Vector::X, 0.1)]);
+    /// assert_eq!(scene.get(ObstacleId(0)).unwrap().pose.translation, Vector::X);
+    /// assert!(scene.get(ObstacleId(1)).is_none());
+    /// ```
     pub fn get(&self, id: ObstacleId) -> Option<&Obstacle> {
         self.obstacles.get(id.index())
     }
 
-    /// The id of the first obstacle with this name.
+    /// The id of the first obstacle with this name (names need not be unique).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![
+    ///     Obstacle::ball("can", Vector::ZERO, 0.1),
+    ///     Obstacle::ball("cup", Vector::X, 0.1),
+    ///     Obstacle::ball("can", Vector::Y, 0.1),
+    /// ]);
+    /// assert_eq!(scene.find("can"), Some(ObstacleId(0)));
+    /// assert_eq!(scene.find("cup"), Some(ObstacleId(1)));
+    /// assert_eq!(scene.find("plate"), None);
+    /// ```
     pub fn find(&self, name: &str) -> Option<ObstacleId> {
         self.obstacles
             .iter()
@@ -118,11 +190,28 @@ impl ParryScene {
     }
 
     /// Number of obstacles.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::ball("a", Vector::ZERO, 0.1), Obstacle::ball("b", Vector::X, 0.1)]);
+    /// assert_eq!(scene.len(), 2);
+    /// ```
     pub fn len(&self) -> usize {
         self.obstacles.len()
     }
 
-    /// Whether the scene has no obstacles.
+    /// Whether the scene has no obstacles (then every query misses).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacles, ParryScene};
+    /// use parry3d::math::Vector;
+    ///
+    /// let empty = ParryScene::new(vec![]);
+    /// assert!(empty.is_empty());
+    /// assert!(!empty.ball_hits(Vector::ZERO, 1.0));
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.obstacles.is_empty()
     }

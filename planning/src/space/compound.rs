@@ -40,6 +40,17 @@ pub struct CompoundSpace<A, B> {
 
 impl<A: Space, B: Space> CompoundSpace<A, B> {
     /// The concatenation of `first` and `second`, with both distance weights 1.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space, Space};
+    ///
+    /// let (base, arm) = (Se2Space::new([0.0, 0.0], [4.0, 4.0])?, JointSpace::new(&[-1.0], &[1.0], &[false])?);
+    /// let space = CompoundSpace::new(base, arm);
+    /// assert_eq!(space.dim(), 4);
+    /// assert_eq!(space.lower(), &[0.0, 0.0, -std::f64::consts::PI, -1.0]);
+    /// assert_eq!(space.weights(), [1.0, 1.0]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn new(first: A, second: B) -> Self {
         let lower = first.lower().iter().chain(second.lower()).copied().collect();
         let upper = first.upper().iter().chain(second.upper()).copied().collect();
@@ -53,6 +64,17 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
     }
 
     /// The same space with distance weights for the two parts (finite, non-negative).
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Space};
+    ///
+    /// let joint = || JointSpace::new(&[-1.0], &[1.0], &[false]);
+    /// let space = CompoundSpace::new(joint()?, joint()?).with_weights(2.0, 0.0)?;
+    /// // The second part does not count.
+    /// assert_eq!(space.distance(&[0.0, 0.0], &[0.5, 1.0]), 1.0);
+    /// assert!(CompoundSpace::new(joint()?, joint()?).with_weights(-1.0, 1.0).is_err());
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn with_weights(mut self, first: f64, second: f64) -> Result<Self, SpaceError> {
         for (what, value) in [("first space", first), ("second space", second)] {
             if !valid_weight(value) {
@@ -67,16 +89,44 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
     }
 
     /// The first part.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space, Space};
+    ///
+    /// let (base, arm) = (Se2Space::new([0.0; 2], [1.0; 2])?, JointSpace::new(&[0.0], &[1.0], &[false])?);
+    /// let space = CompoundSpace::new(base, arm);
+    /// assert_eq!(space.first().dim(), 3);
+    /// assert_eq!(space.first().yaw_weight(), Se2Space::DEFAULT_YAW_WEIGHT);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn first(&self) -> &A {
         &self.first
     }
 
     /// The second part.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space};
+    ///
+    /// let arm = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?.with_names(["lift", "pan"])?;
+    /// let space = CompoundSpace::new(Se2Space::new([0.0; 2], [1.0; 2])?, arm);
+    /// assert_eq!(space.second().names(), ["lift", "pan"]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn second(&self) -> &B {
         &self.second
     }
 
     /// Distance weights of the two parts.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace};
+    ///
+    /// let joint = || JointSpace::new(&[0.0], &[1.0], &[false]);
+    /// assert_eq!(CompoundSpace::new(joint()?, joint()?).weights(), [1.0, 1.0]);
+    /// assert_eq!(CompoundSpace::new(joint()?, joint()?).with_weights(1.0, 0.25)?.weights(), [1.0, 0.25]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn weights(&self) -> [f64; 2] {
         self.weights
     }
@@ -88,7 +138,8 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
     /// ```
     /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space};
     ///
-    /// let space = CompoundSpace::new(Se2Space::new([0.0; 2], [1.0; 2])?, JointSpace::new(&[0.0], &[1.0], &[false])?);
+    /// let (base, arm) = (Se2Space::new([0.0; 2], [1.0; 2])?, JointSpace::new(&[0.0], &[1.0], &[false])?);
+    /// let space = CompoundSpace::new(base, arm);
     /// let (base, arm) = space.split(&[0.1, 0.2, 0.3, 0.4]);
     /// assert_eq!((base, arm), (&[0.1, 0.2, 0.3][..], &[0.4][..]));
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
@@ -101,6 +152,18 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
     /// Splits a mutable state into the parts' coordinates.
     ///
     /// Panics if `q` is shorter than the first part's dimension.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space};
+    ///
+    /// let (base, arm) = (Se2Space::new([0.0; 2], [1.0; 2])?, JointSpace::new(&[0.0], &[1.0], &[false])?);
+    /// let space = CompoundSpace::new(base, arm);
+    /// let mut q = [0.1, 0.2, 0.3, 0.4];
+    /// let (_, arm) = space.split_mut(&mut q);
+    /// arm[0] = 0.9;
+    /// assert_eq!(q, [0.1, 0.2, 0.3, 0.9]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     #[inline]
     pub fn split_mut<'q>(&self, q: &'q mut [f64]) -> (&'q mut [f64], &'q mut [f64]) {
         q.split_at_mut(self.first.dim())

@@ -64,6 +64,20 @@ impl JointSpace {
     /// velocity limits, in chain order.
     ///
     /// Fails only if the model's limits are unusable for a bounded joint (NaN or infinite).
+    ///
+    /// ```
+    /// use hearth_planning::kinematics::{Chain, RobotModel};
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let arm = Chain::named(&fetch, "arm").unwrap();
+    /// let space = JointSpace::from_chain(&arm)?;
+    /// assert_eq!(space.names(), arm.joint_names());
+    /// assert_eq!(space.velocity_limits(), arm.velocity_limits());
+    /// // The upper-arm, forearm and wrist roll joints turn without limit.
+    /// assert_eq!(space.continuous().iter().filter(|&&c| c).count(), 3);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn from_chain(chain: &Chain) -> Result<Self, SpaceError> {
         let mut space = Self::build(
             chain.joint_names().to_vec(),
@@ -178,22 +192,58 @@ impl JointSpace {
         }
     }
 
-    /// Joint names, in coordinate order.
+    /// Joint names, in coordinate order (`q0`, `q1`, … unless set with
+    /// [`JointSpace::with_names`]).
+    ///
+    /// ```
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// assert_eq!(space.names(), ["q0", "q1"]);
+    /// assert_eq!(space.with_names(["lift", "pan"])?.names(), ["lift", "pan"]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn names(&self) -> &[String] {
         &self.names
     }
 
     /// Which joints are continuous.
+    ///
+    /// ```
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// assert_eq!(space.continuous(), &[false, true]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn continuous(&self) -> &[bool] {
         &self.continuous
     }
 
-    /// Distance weights per joint.
+    /// Distance weights per joint (1 unless set with [`JointSpace::with_weights`]).
+    ///
+    /// ```
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// assert_eq!(space.weights(), &[1.0, 1.0]);
+    /// assert_eq!(space.with_weights(&[0.5, 2.0])?.weights(), &[0.5, 2.0]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn weights(&self) -> &[f64] {
         &self.weights
     }
 
     /// Velocity limits per joint (`+∞` where none was given).
+    ///
+    /// ```
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// assert_eq!(space.velocity_limits(), &[f64::INFINITY; 2]);
+    /// assert_eq!(space.with_velocity_limits(&[0.5, f64::INFINITY])?.velocity_limits(), &[0.5, f64::INFINITY]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn velocity_limits(&self) -> &[f64] {
         &self.velocity_limits
     }

@@ -63,15 +63,49 @@ use rand::{Rng, RngExt};
 /// ```
 pub trait Space: Send + Sync {
     /// Number of coordinates of a state.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Se2Space, Space};
+    ///
+    /// assert_eq!(Se2Space::new([0.0, 0.0], [1.0, 1.0])?.dim(), 3);
+    /// assert_eq!(JointSpace::new(&[0.0; 4], &[1.0; 4], &[false; 4])?.dim(), 4);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn dim(&self) -> usize;
 
     /// Writes a state drawn uniformly inside the bounds into `out` (continuous coordinates in
     /// `[-π, π)`). The same generator state gives the same sample, bit for bit.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    /// use rand::SeedableRng;
+    ///
+    /// let space = JointSpace::new(&[0.0, -2.0], &[1.0, 2.0], &[false, false])?;
+    /// let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+    /// space.sample(&mut rand_pcg::Pcg64Mcg::seed_from_u64(3), &mut a);
+    /// space.sample(&mut rand_pcg::Pcg64Mcg::seed_from_u64(3), &mut b);
+    /// assert_eq!(a, b);
+    /// assert!(space.satisfies_bounds(&a));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn sample<R: Rng + ?Sized>(&self, rng: &mut R, out: &mut [f64]);
 
     /// The distance between two states: a metric (symmetric, zero on equal states, obeys the
     /// triangle inequality), measured along the shortest way, so continuous coordinates are
     /// compared modulo 2π.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    /// use std::f64::consts::PI;
+    ///
+    /// let space = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// // 0.3 on the bounded joint, 0.4 through ±π on the continuous one.
+    /// let (a, b) = ([0.0, PI - 0.2], [0.3, -PI + 0.2]);
+    /// assert!((space.distance(&a, &b) - 0.5).abs() < 1e-12);
+    /// assert_eq!(space.distance(&a, &b), space.distance(&b, &a));
+    /// assert_eq!(space.distance(&a, &a), 0.0);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn distance(&self, a: &[f64], b: &[f64]) -> f64;
 
     /// Writes the state a fraction `t` of the way from `a` to `b` into `out`, along the
@@ -80,32 +114,115 @@ pub trait Space: Send + Sync {
     /// `t = 0` gives `a` and `t = 1` gives `b`, bit for bit; `t` outside `[0, 1]` is clamped.
     /// `distance(a, interpolate(a, b, t)) = t · distance(a, b)` up to rounding, and the result
     /// lies within the bounds when `a` and `b` do.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let space = JointSpace::new(&[0.0, 0.0], &[2.0, 2.0], &[false, false])?;
+    /// let mut out = [0.0; 2];
+    /// space.interpolate(&[0.0, 0.0], &[2.0, 1.0], 0.25, &mut out);
+    /// assert_eq!(out, [0.5, 0.25]);
+    /// space.interpolate(&[0.0, 0.0], &[2.0, 1.0], 3.0, &mut out); // clamped to t = 1
+    /// assert_eq!(out, [2.0, 1.0]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn interpolate(&self, a: &[f64], b: &[f64], t: f64, out: &mut [f64]);
 
     /// Lower bounds per coordinate (`-π` for continuous coordinates).
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let space = JointSpace::new(&[-1.0, 0.0], &[2.0, 0.0], &[false, true])?;
+    /// assert_eq!(space.lower(), &[-1.0, -std::f64::consts::PI]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn lower(&self) -> &[f64];
 
     /// Upper bounds per coordinate (`π` for continuous coordinates).
+    ///
+    /// ```
+    /// use hearth_planning::space::{Se2Space, Space};
+    ///
+    /// let base = Se2Space::new([-1.0, -2.0], [3.0, 4.0])?;
+    /// assert_eq!(base.upper(), &[3.0, 4.0, std::f64::consts::PI]);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn upper(&self) -> &[f64];
 
     /// Brings `q` into the bounds: bounded coordinates are clamped, continuous ones wrapped
     /// into `(-π, π]`. NaN stays NaN.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    /// use std::f64::consts::TAU;
+    ///
+    /// let space = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// let mut q = [1.5, 4.0];
+    /// space.enforce_bounds(&mut q);
+    /// assert_eq!(q[0], 1.0);
+    /// assert!((q[1] - (4.0 - TAU)).abs() < 1e-12);
+    /// assert!(space.satisfies_bounds(&q));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn enforce_bounds(&self, q: &mut [f64]);
 
     /// Whether `q` has [`Space::dim`] coordinates, all within their bounds (inclusive;
     /// continuous coordinates within `[-π, π]`). NaN is out of bounds.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let space = JointSpace::new(&[-1.0], &[1.0], &[false])?;
+    /// assert!(space.satisfies_bounds(&[1.0]));
+    /// assert!(!space.satisfies_bounds(&[1.1]));
+    /// assert!(!space.satisfies_bounds(&[f64::NAN]));
+    /// assert!(!space.satisfies_bounds(&[0.0, 0.0])); // wrong length
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn satisfies_bounds(&self, q: &[f64]) -> bool;
 
     /// Writes `b ⊖ a` into `out`: `b[i] - a[i]` per coordinate, wrapped into `(-π, π]` for
     /// continuous ones, so that `a + difference` reaches `b` the short way. Shortcutting and
     /// trajectory timing work on these per-coordinate displacements.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space};
+    /// use std::f64::consts::TAU;
+    ///
+    /// let space = JointSpace::new(&[-1.0, 0.0], &[1.0, 0.0], &[false, true])?;
+    /// let mut d = [0.0; 2];
+    /// space.difference(&[0.5, 3.0], &[-0.5, -3.0], &mut d);
+    /// assert_eq!(d[0], -1.0);
+    /// assert!((d[1] - (TAU - 6.0)).abs() < 1e-12); // +0.28 through π, not -6
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn difference(&self, a: &[f64], b: &[f64], out: &mut [f64]);
 
     /// Checks a state from outside (a problem file, a user): its length, that every coordinate
     /// is a finite number and within the bounds. The error names the first bad coordinate.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Space, SpaceError};
+    ///
+    /// let space = JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false])?;
+    /// assert!(space.check(&[0.5, -0.5]).is_ok());
+    /// assert!(matches!(space.check(&[0.5]), Err(SpaceError::DimensionMismatch { expected: 2, got: 1, .. })));
+    /// assert!(matches!(space.check(&[0.0, 7.0]), Err(SpaceError::OutOfBounds { index: 1, .. })));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn check(&self, q: &[f64]) -> Result<(), SpaceError>;
 
     /// The name of coordinate `i` (a joint name, `x`, `y`, `yaw`), or `None` past the end.
+    ///
+    /// ```
+    /// use hearth_planning::space::{Se2Space, Space};
+    ///
+    /// let base = Se2Space::new([0.0, 0.0], [1.0, 1.0])?;
+    /// assert_eq!(base.coordinate_name(2), Some("yaw"));
+    /// assert_eq!(base.coordinate_name(3), None);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     fn coordinate_name(&self, i: usize) -> Option<&str>;
 
     /// `Some(w)` when [`Space::distance`] is exactly the weighted Euclidean distance

@@ -47,6 +47,17 @@ impl Se2Space {
     /// a household mobile base (Fetch, LoCoBot, TurtleBot: radius 0.2–0.3 m) or a held arm
     /// sweeps per radian of turning, so neither translation nor rotation dominates
     /// nearest-neighbour queries.
+    ///
+    /// ```
+    /// use hearth_planning::space::{Se2Space, Space};
+    /// use std::f64::consts::{FRAC_PI_2, PI};
+    ///
+    /// let base = Se2Space::new([0.0, 0.0], [1.0, 1.0])?;
+    /// assert_eq!(base.yaw_weight(), Se2Space::DEFAULT_YAW_WEIGHT);
+    /// // A half turn in place counts like driving π/2 ≈ 1.57 m.
+    /// assert!((base.distance(&[0.0, 0.0, 0.0], &[0.0, 0.0, PI]) - FRAC_PI_2).abs() < 1e-12);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub const DEFAULT_YAW_WEIGHT: f64 = 0.5;
 
     /// A base space with `x ∈ [lower[0], upper[0]]` and `y ∈ [lower[1], upper[1]]`; bounds
@@ -94,6 +105,15 @@ impl Se2Space {
     }
 
     /// The yaw weight in metres per radian.
+    ///
+    /// ```
+    /// use hearth_planning::space::Se2Space;
+    ///
+    /// let base = Se2Space::new([0.0, 0.0], [1.0, 1.0])?;
+    /// assert_eq!(base.yaw_weight(), 0.5);
+    /// assert_eq!(base.with_yaw_weight(2.0)?.yaw_weight(), 2.0);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
     pub fn yaw_weight(&self) -> f64 {
         self.yaw_weight
     }

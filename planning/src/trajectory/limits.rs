@@ -56,7 +56,21 @@ pub struct Limits {
 
 impl Limits {
     /// Limits from explicit values: velocity and acceleration finite and positive, jerk positive
-    /// (`+∞` allowed), all of the same length.
+    /// (`+∞` allowed), all of the same length. No position bounds are set.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::{Limits, TrajectoryError};
+    ///
+    /// let limits = Limits::new(vec![1.0, 2.0], vec![4.0, 4.0], vec![f64::INFINITY, 100.0])?;
+    /// assert_eq!(limits.dim(), 2);
+    /// assert!(matches!(
+    ///     Limits::new(vec![1.0], vec![f64::INFINITY], vec![10.0]),
+    ///     Err(TrajectoryError::BadLimit { what: "acceleration", index: 0, .. })
+    /// ));
+    /// let short = Limits::new(vec![1.0; 2], vec![1.0], vec![1.0; 2]);
+    /// assert!(matches!(short, Err(TrajectoryError::Dimension { what: "acceleration", expected: 2, got: 1 })));
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn new(velocity: Vec<f64>, acceleration: Vec<f64>, jerk: Vec<f64>) -> Result<Self, TrajectoryError> {
         let n = velocity.len();
         for (what, v) in [("acceleration", &acceleration), ("jerk", &jerk)] {
@@ -90,7 +104,22 @@ impl Limits {
 
     /// The limits of a chain: velocity from the robot model (a joint without one gets
     /// 1 rad/s or m/s), acceleration and jerk from the built-in robot's defaults, else
-    /// 2× velocity per second and 50× acceleration per second.
+    /// 2× velocity per second and 50× acceleration per second. Position bounds are the joint
+    /// limits (`±∞` for continuous joints).
+    ///
+    /// ```
+    /// use hearth_planning::kinematics::{Chain, RobotModel};
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let head = Chain::named(&fetch, "head").unwrap();
+    /// let limits = Limits::for_chain(&head);
+    /// // No built-in defaults for the head: derived from its velocity limits.
+    /// let v = limits.velocity()[0];
+    /// assert_eq!(limits.acceleration()[0], 2.0 * v);
+    /// assert_eq!(limits.jerk()[0], 50.0 * limits.acceleration()[0]);
+    /// assert_eq!(limits.position_bounds().unwrap().0, head.lower());
+    /// ```
     pub fn for_chain(chain: &Chain) -> Self {
         let robot = chain.model().name().to_owned();
         let mut velocity = Vec::with_capacity(chain.dof());
@@ -126,7 +155,17 @@ impl Limits {
     }
 
     /// The same limits with position bounds (`±∞` for unbounded coordinates) that generated
-    /// motions must respect.
+    /// motions must respect. Fails when either list does not have [`Limits::dim`] entries.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
+    /// let bounded = limits.clone().with_position_bounds(vec![-0.5], vec![0.5])?;
+    /// assert_eq!(bounded.position_bounds(), Some((&[-0.5][..], &[0.5][..])));
+    /// assert!(limits.with_position_bounds(vec![], vec![0.5]).is_err());
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn with_position_bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, TrajectoryError> {
         for (what, v) in [("lower bounds", &lower), ("upper bounds", &upper)] {
             if v.len() != self.dim() {
@@ -141,12 +180,33 @@ impl Limits {
         Ok(self)
     }
 
-    /// The position bounds, when set.
+    /// The position bounds (lower, upper), when set.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
+    /// assert_eq!(limits.position_bounds(), None);
+    /// let limits = limits.with_position_bounds(vec![f64::NEG_INFINITY], vec![1.0])?;
+    /// assert_eq!(limits.position_bounds().unwrap().1, &[1.0]);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn position_bounds(&self) -> Option<(&[f64], &[f64])> {
         self.bounds.as_ref().map(|(l, u)| (l.as_slice(), u.as_slice()))
     }
 
     /// The same limits with jerk unbounded (acceleration-bounded motion).
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0, 2.0], vec![3.0, 4.0], vec![50.0, 60.0])?;
+    /// let parabolic = limits.without_jerk();
+    /// assert_eq!(parabolic.jerk(), &[f64::INFINITY; 2]);
+    /// assert_eq!(parabolic.velocity(), limits.velocity());
+    /// assert_eq!(parabolic.acceleration(), limits.acceleration());
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn without_jerk(&self) -> Self {
         Self {
             jerk: vec![f64::INFINITY; self.velocity.len()],
@@ -155,7 +215,19 @@ impl Limits {
     }
 
     /// Velocity and acceleration scaled by `velocity_scale` and `acceleration_scale` (each in
-    /// `(0, 1]`; other values leave the limit unchanged), like MoveIt's scaling factors.
+    /// `(0, 1]`; other values leave the limit unchanged), like MoveIt's scaling factors. Jerk and
+    /// position bounds stay as they are.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![2.0], vec![4.0], vec![100.0])?;
+    /// let slow = limits.scaled(0.5, 0.25);
+    /// assert_eq!((slow.velocity(), slow.acceleration(), slow.jerk()), (&[1.0][..], &[1.0][..], &[100.0][..]));
+    /// // Out of range: unchanged.
+    /// assert_eq!(limits.scaled(2.0, 0.0), limits);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn scaled(&self, velocity_scale: f64, acceleration_scale: f64) -> Self {
         let s = |x: f64| if x > 0.0 && x <= 1.0 { x } else { 1.0 };
         Self {
@@ -167,21 +239,53 @@ impl Limits {
     }
 
     /// Number of coordinates.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0; 3], vec![1.0; 3], vec![1.0; 3])?;
+    /// assert_eq!(limits.dim(), 3);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn dim(&self) -> usize {
         self.velocity.len()
     }
 
     /// Velocity limits.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.5, 2.0], vec![3.0; 2], vec![f64::INFINITY; 2])?;
+    /// assert_eq!(limits.velocity(), &[1.5, 2.0]);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn velocity(&self) -> &[f64] {
         &self.velocity
     }
 
     /// Acceleration limits.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0; 2], vec![3.0, 0.5], vec![f64::INFINITY; 2])?;
+    /// assert_eq!(limits.acceleration(), &[3.0, 0.5]);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn acceleration(&self) -> &[f64] {
         &self.acceleration
     }
 
     /// Jerk limits (`+∞` when unbounded).
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::Limits;
+    ///
+    /// let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![20.0, f64::INFINITY])?;
+    /// assert_eq!(limits.jerk(), &[20.0, f64::INFINITY]);
+    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// ```
     pub fn jerk(&self) -> &[f64] {
         &self.jerk
     }

@@ -38,7 +38,22 @@ use crate::validity::StateValidator;
 use generator::{Generated, Sync};
 use ramp::LineRamp;
 
-/// Why a trajectory could not be built.
+/// Why a trajectory could not be built, or why it is unusable.
+///
+/// ```
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::trajectory::{Limits, Trajectory, TrajectoryError};
+///
+/// let space = JointSpace::new(&[-1.0], &[1.0], &[false])?;
+/// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+/// let empty = Path { states: vec![] };
+/// assert_eq!(Trajectory::rest_to_rest(&space, &empty, &limits).unwrap_err(), TrajectoryError::EmptyPath);
+/// let nan = Path { states: vec![vec![0.0], vec![f64::NAN]] };
+/// let error = Trajectory::rest_to_rest(&space, &nan, &limits).unwrap_err();
+/// assert_eq!(error, TrajectoryError::NonFinite { index: 1 });
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum TrajectoryError {
@@ -132,6 +147,23 @@ struct Span {
 }
 
 /// A time-parametrised motion through configuration space; see the [module](self) docs.
+/// Cloning copies the list of spans only; the motion pieces are shared.
+///
+/// ```
+/// use hearth_planning::planner::Path;
+/// use hearth_planning::space::JointSpace;
+/// use hearth_planning::trajectory::{Limits, Trajectory};
+///
+/// let space = JointSpace::new(&[0.0], &[4.0], &[false])?;
+/// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+/// let t = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.0], vec![2.0]] }, &limits)?;
+/// // 1 s speeding up to 1 rad/s, 1 s at that speed, 1 s slowing down.
+/// assert!((t.duration() - 3.0).abs() < 1e-9);
+/// let (mut q, mut v) = ([0.0], [0.0]);
+/// t.sample(1.5, &mut q, Some(&mut v));
+/// assert!((q[0] - 1.0).abs() < 1e-9 && (v[0] - 1.0).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Trajectory {
     dim: usize,
@@ -227,7 +259,27 @@ impl Trajectory {
     /// Stops at every waypoint and moves along the straight edges between them with
     /// trapezoidal (acceleration-bounded) speed: exactly the geometric path, so its collision
     /// checks carry over. The usual input of [`parabolic
-    /// shortcutting`](crate::shortcut::parabolic).
+    /// shortcutting`](crate::shortcut::parabolic). A path of one state gives a motion of
+    /// duration 0.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[-2.0, -2.0], &[2.0, 2.0], &[false, false])?;
+    /// let limits = Limits::new(vec![1.0, 1.0], vec![2.0, 2.0], vec![f64::INFINITY; 2])?;
+    /// let path = Path { states: vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 1.0]] };
+    /// let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
+    /// assert_eq!(t.spans(), 2);
+    /// // Both edges take as long, so half way the motion is at rest at the corner.
+    /// let (mut q, mut v) = ([0.0; 2], [0.0; 2]);
+    /// t.sample(t.duration() / 2.0, &mut q, Some(&mut v));
+    /// assert_eq!((q, v), ([1.0, 0.0], [0.0, 0.0]));
+    /// let still = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.5, 0.5]] }, &limits)?;
+    /// assert_eq!(still.duration(), 0.0);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn rest_to_rest<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
         check_dim(limits, space.dim())?;
         let states = unwrapped(space, path)?;
@@ -291,6 +343,23 @@ impl Trajectory {
     /// A jerk-limited motion (Ruckig) from rest at the first waypoint to rest at the last that
     /// passes through the others without stopping. It may cut corners between waypoints, so
     /// check it ([`Trajectory::check`]) or use [`Trajectory::jerk_limited_stops`].
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![20.0; 2])?;
+    /// let path = Path { states: vec![vec![0.1, 0.1], vec![0.5, 0.6], vec![0.9, 0.2]] };
+    /// let through = Trajectory::jerk_limited(&space, &path, &limits)?;
+    /// // Not stopping at the middle waypoint is faster.
+    /// assert!(through.duration() < Trajectory::jerk_limited_stops(&space, &path, &limits)?.duration());
+    /// let mut q = [0.0; 2];
+    /// through.sample(through.duration(), &mut q, None);
+    /// assert!((q[0] - 0.9).abs() < 1e-9 && (q[1] - 0.2).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn jerk_limited<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
         check_dim(limits, space.dim())?;
         let states = unwrapped(space, path)?;
@@ -299,7 +368,25 @@ impl Trajectory {
     }
 
     /// A jerk-limited motion (Ruckig, phase-synchronised) that stops at every waypoint and
-    /// stays on the straight edges between them.
+    /// stays on the straight edges between them: one span per edge.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0, 0.5], vec![2.0, 1.0], vec![20.0, 10.0])?;
+    /// let path = Path { states: vec![vec![0.0, 0.0], vec![0.8, 0.4]] };
+    /// let t = Trajectory::jerk_limited_stops(&space, &path, &limits)?;
+    /// assert_eq!(t.spans(), 1);
+    /// let mut q = [0.0; 2];
+    /// for k in 0..=10 {
+    ///     t.sample(t.duration() * k as f64 / 10.0, &mut q, None);
+    ///     assert!((q[1] - 0.5 * q[0]).abs() < 1e-9); // on the edge
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn jerk_limited_stops<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
         check_dim(limits, space.dim())?;
         let states = unwrapped(space, path)?;
@@ -316,7 +403,22 @@ impl Trajectory {
     }
 
     /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` within `limits` (Ruckig; with
-    /// unbounded jerk this is the parabolic ramp of acceleration-bounded shortcutting).
+    /// unbounded jerk this is the parabolic ramp of acceleration-bounded shortcutting). Fails
+    /// on inputs of the wrong length or with non-finite values, and when Ruckig finds no motion.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
+    /// // From 0 at full speed to rest at 1: 0.75 s cruising, then 0.5 s braking over 0.25 rad.
+    /// let ramp = Trajectory::ramp(&[0.0], &[1.0], &[1.0], &[0.0], &limits)?;
+    /// assert!((ramp.duration() - 1.25).abs() < 1e-6);
+    /// let (mut q, mut v) = ([0.0], [0.0]);
+    /// ramp.sample(ramp.duration(), &mut q, Some(&mut v));
+    /// assert!((q[0] - 1.0).abs() < 1e-9 && v[0].abs() < 1e-9);
+    /// assert!(Trajectory::ramp(&[0.0, 0.0], &[0.0], &[1.0], &[0.0], &limits).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn ramp(q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64], limits: &Limits) -> Result<Self, TrajectoryError> {
         let n = limits.dim();
         for (what, x) in [("q0", q0), ("v0", v0), ("q1", q1), ("v1", v1)] {
@@ -390,21 +492,73 @@ impl Trajectory {
     }
 
     /// Number of coordinates.
+    ///
+    /// ```
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let limits = Limits::new(vec![1.0; 3], vec![1.0; 3], vec![f64::INFINITY; 3])?;
+    /// assert_eq!(Trajectory::ramp(&[0.0; 3], &[0.0; 3], &[1.0; 3], &[0.0; 3], &limits)?.dim(), 3);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn dim(&self) -> usize {
         self.dim
     }
 
     /// Total duration in seconds.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
+    /// let limits = Limits::new(vec![2.0], vec![1.0], vec![f64::INFINITY])?;
+    /// // Too short an edge to reach 2 rad/s: 1 s speeding up, 1 s slowing down.
+    /// let t = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.0], vec![1.0]] }, &limits)?;
+    /// assert!((t.duration() - 2.0).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn duration(&self) -> f64 {
         self.ends.last().copied().unwrap_or(0.0)
     }
 
     /// Number of spans (straight segments and ramps).
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0], &[3.0], &[false])?;
+    /// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+    /// let path = Path { states: vec![vec![0.0], vec![1.0], vec![3.0], vec![2.0]] };
+    /// let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
+    /// assert_eq!(t.spans(), 3);
+    /// let back = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![2.0], vec![0.0]] }, &limits)?;
+    /// assert_eq!(t.then(back)?.spans(), 4);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn spans(&self) -> usize {
         self.spans.len()
     }
 
     /// Position (and velocity) at time `t`, clamped to `[0, duration]`. Does not allocate.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
+    /// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+    /// let t = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.2], vec![0.8]] }, &limits)?;
+    /// let (mut q, mut v) = ([0.0], [0.0]);
+    /// t.sample(-1.0, &mut q, None);
+    /// assert_eq!(q, [0.2]);
+    /// t.sample(t.duration() + 1.0, &mut q, Some(&mut v));
+    /// assert!((q[0] - 0.8).abs() < 1e-12 && v[0].abs() < 1e-12);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn sample(&self, t: f64, q: &mut [f64], v: Option<&mut [f64]>) {
         let t = t.clamp(0.0, self.duration());
         let i = self.span_at(t);
@@ -453,6 +607,21 @@ impl Trajectory {
 
     /// States along the trajectory no more than `resolution` apart (in the space's distance),
     /// from the first state to the last, with continuous coordinates wrapped back.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::{JointSpace, Space};
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0], &[0.0], &[true])?;
+    /// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+    /// // The short way from 3 to -3 rad is through π: the motion ends at 2π - 3, unwrapped.
+    /// let t = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![3.0], vec![-3.0]] }, &limits)?;
+    /// let path = t.to_path(&space, 0.05);
+    /// assert!(path.states.windows(2).all(|w| space.distance(&w[0], &w[1]) <= 0.05));
+    /// assert!((path.states.last().unwrap()[0] + 3.0).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn to_path<S: Space>(&self, space: &S, resolution: f64) -> Path {
         let mut flat = Vec::new();
         self.discretise(space, resolution, &mut flat);
@@ -470,6 +639,21 @@ impl Trajectory {
     }
 
     /// Length of the trajectory's path in the space's metric (sampled at `resolution`).
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2])?;
+    /// let path = Path { states: vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 1.0]] };
+    /// let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
+    /// // The samples are joined by straight lines, which may cut the corner by a little.
+    /// let length = t.length(&space, 0.01);
+    /// assert!(length <= path.length(&space) + 1e-9 && length > path.length(&space) - 0.01);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn length<S: Space>(&self, space: &S, resolution: f64) -> f64 {
         let mut flat = Vec::new();
         self.discretise(space, resolution, &mut flat);
@@ -495,7 +679,34 @@ impl Trajectory {
     }
 
     /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
-    /// (midpoints first); `Err` carries the time of the first colliding state found.
+    /// (midpoints first); `Err` carries the time of the first colliding state found (not
+    /// necessarily the earliest one).
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory, TrajectoryError};
+    /// use hearth_planning::validity::StateValidator;
+    ///
+    /// // Everything right of x = 0.5 is blocked.
+    /// struct Left(u64);
+    /// impl StateValidator for Left {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; q[0] < 0.5 }
+    ///     fn checks(&self) -> u64 { self.0 }
+    /// }
+    /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
+    /// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
+    /// let leg = |b: f64| Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.1], vec![b]] }, &limits);
+    /// assert!(leg(0.4)?.check(&space, &mut Left(0), 0.01).is_ok());
+    /// let across = leg(0.9)?;
+    /// let Err(TrajectoryError::InCollision { time }) = across.check(&space, &mut Left(0), 0.01) else {
+    ///     panic!("the motion crosses x = 0.5")
+    /// };
+    /// let mut q = [0.0];
+    /// across.sample(time, &mut q, None);
+    /// assert!(q[0] >= 0.5);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn check<S: Space, V: StateValidator + ?Sized>(
         &self,
         space: &S,
@@ -522,6 +733,21 @@ impl Trajectory {
 
     /// Largest absolute velocity and acceleration per coordinate, measured by sampling every
     /// `dt` seconds (accelerations by finite differences of velocities).
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[2.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2])?;
+    /// let path = Path { states: vec![vec![0.0, 0.0], vec![2.0, 1.0]] };
+    /// let (v, a) = Trajectory::rest_to_rest(&space, &path, &limits)?.peak_velocity_acceleration(1e-3);
+    /// // The first coordinate moves twice as far, so it sets the pace at its limits.
+    /// assert!((v[0] - 1.0).abs() < 1e-6 && (a[0] - 1.0).abs() < 1e-6);
+    /// assert!((v[1] - 0.5).abs() < 1e-6 && (a[1] - 0.5).abs() < 1e-6);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn peak_velocity_acceleration(&self, dt: f64) -> (Vec<f64>, Vec<f64>) {
         let n = self.dim;
         let (mut q, mut v, mut prev) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
