@@ -566,7 +566,7 @@ impl<S: Space> Planner<S> for BiRrt {
         budget: &Budget,
         rng: &mut R,
     ) -> Result<Solution, PlanError> {
-        let mut run = Run::start(budget, motion, validator);
+        let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
         let range = resolve_range(space, self.range, BIRRT_RANGE_SCALE)?;
         let domain = match self.dynamic_domain {
@@ -599,7 +599,7 @@ impl<S: Space> Planner<S> for BiRrt {
                 Some(e)
             }
         };
-        let goals = valid_goals(space, validator, request, budget)?;
+        let goals = valid_goals(space, validator, request)?;
         let dim = space.dim();
         // trees[0] grows from the start, trees[1] from the goals.
         let mut trees = [Grown::new(dim), Grown::new(dim)];

@@ -52,8 +52,8 @@ pub enum PlanError {
         reason: String,
     },
     /// The request, budget or planner settings are unusable (wrong dimension, NaN, out of
-    /// bounds, no goal, no budget, a non-positive range, …); the message names the culprit,
-    /// such as `goal 2: coordinate 3 (panda_joint4) is 4.1, outside [-3.07, -0.07]` from
+    /// bounds, no goal, no budget, a negative time limit, a non-positive range, …); the message
+    /// names the culprit, such as `goal 2: coordinate 3 (panda_joint4) is 4.1, outside [-3.07, -0.07]` from
     /// [`Space::check`](crate::space::Space::check).
     #[error("bad input: {0}")]
     BadInput(String),

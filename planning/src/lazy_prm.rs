@@ -613,7 +613,7 @@ impl<S: Space> Planner<S> for LazyPrm {
         if k == 0 {
             return Err(PlanError::BadInput("k is 0; LazyPRM needs k ≥ 1".to_owned()));
         }
-        let mut run = Run::start(budget, motion, validator);
+        let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
         let range = resolve_range(space, self.settings.range, 1.0)?;
         let enhance = self.settings.enhance;
@@ -650,7 +650,7 @@ impl<S: Space> Planner<S> for LazyPrm {
                 self.settings.tree_step
             )));
         }
-        let goals = valid_goals(space, validator, request, budget)?;
+        let goals = valid_goals(space, validator, request)?;
         let dim = space.dim();
         let roadmap = match &mut self.roadmap {
             Some(r) if r.nn.dim() == dim => r,

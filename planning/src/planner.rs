@@ -16,38 +16,67 @@ use crate::space::Space;
 use crate::validity::StateValidator;
 
 /// When a planner gives up: after a wall-clock time, a number of iterations, or whichever
-/// comes first. At least one must be set.
+/// comes first. At least one must be set, and a time limit must be zero or more seconds:
+/// planners refuse other budgets with [`PlanError::BadInput`].
 ///
 /// ```
 /// use hearth_planning::planner::Budget;
 ///
 /// let b = Budget::time(0.5).with_iterations(10_000);
 /// assert_eq!(b.iterations, Some(10_000));
-/// assert_eq!(b.time.unwrap().as_millis(), 500);
+/// assert_eq!(b.time, Some(0.5));
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Budget {
-    /// Wall-clock limit.
-    pub time: Option<Duration>,
+    /// Wall-clock limit in seconds, as given. Planners refuse a NaN or negative one with
+    /// [`PlanError::BadInput`] and read more than 10⁹ s (`+∞` included) as 10⁹ s.
+    pub time: Option<f64>,
     /// Iteration limit (what an iteration is depends on the planner; see each planner).
     /// Iteration limits make a run reproducible regardless of machine speed.
     pub iterations: Option<u64>,
 }
 
+/// The longest time limit, in seconds (about 32 years); longer ones, `+∞` included, read as
+/// this.
+const MAX_TIME: f64 = 1e9;
+
 impl Budget {
-    /// A time limit of `secs` seconds (negative or NaN counts as zero, more than 10⁹ s as 10⁹ s).
+    /// A time limit of `secs` seconds and no iteration limit. `secs` is kept as given: planners
+    /// refuse a NaN or negative time limit with [`PlanError::BadInput`] (naming it) and read
+    /// more than 10⁹ s, `+∞` included, as 10⁹ s. A zero time limit is valid: it runs out at once,
+    /// so the planner returns [`PlanError::Timeout`] unless it finds a path before its first
+    /// iteration.
     ///
     /// ```
-    /// use std::time::Duration;
-    /// use hearth_planning::planner::Budget;
-    ///
-    /// assert_eq!(Budget::time(0.25).time, Some(Duration::from_millis(250)));
-    /// assert_eq!(Budget::time(0.25).iterations, None);
-    /// assert_eq!(Budget::time(-1.0).time, Some(Duration::ZERO));
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::planner::{Budget, Goal, PlanRequest, Planner};
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::{PlanError, Rrt};
+    /// use rand::SeedableRng;
+    /// # use hearth_planning::validity::StateValidator;
+    /// # struct Free(u64);
+    /// # impl StateValidator for Free {
+    /// #     fn is_valid(&mut self, _: &[f64]) -> bool { self.0 += 1; true }
+    /// #     fn checks(&self) -> u64 { self.0 }
+    /// # }
+    /// assert_eq!(Budget::time(0.25), Budget { time: Some(0.25), iterations: None });
+    /// // `Free` is a validator that accepts every state.
+    /// let mut motion = MotionValidator::new(JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?, 0.01);
+    /// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.9]));
+    /// let mut plan = |budget: Budget| {
+    ///     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+    ///     Rrt::default().plan(&mut motion, &mut Free(0), &request, &budget, &mut rng)
+    /// };
+    /// assert!(plan(Budget::time(10.0)).is_ok());
+    /// assert!(matches!(plan(Budget::time(0.0)), Err(PlanError::Timeout { .. })));
+    /// let Err(PlanError::BadInput(why)) = plan(Budget::time(f64::NAN)) else { panic!("NaN s is refused") };
+    /// assert!(why.contains("time limit is NaN"));
+    /// assert!(matches!(plan(Budget::time(-1.0)), Err(PlanError::BadInput(_))));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn time(secs: f64) -> Self {
         Self {
-            time: Some(Duration::from_secs_f64(if secs > 0.0 { secs.min(1e9) } else { 0.0 })),
+            time: Some(secs),
             iterations: None,
         }
     }
@@ -69,11 +98,10 @@ impl Budget {
     /// The same budget with an iteration limit too (replacing any it had).
     ///
     /// ```
-    /// use std::time::Duration;
     /// use hearth_planning::planner::Budget;
     ///
     /// let b = Budget::time(2.0).with_iterations(100);
-    /// assert_eq!((b.time, b.iterations), (Some(Duration::from_secs(2)), Some(100)));
+    /// assert_eq!((b.time, b.iterations), (Some(2.0), Some(100)));
     /// assert_eq!(Budget::iterations(5).with_iterations(7).iterations, Some(7));
     /// ```
     pub fn with_iterations(mut self, n: u64) -> Self {
@@ -81,29 +109,40 @@ impl Budget {
         self
     }
 
-    /// The same budget with a time limit too (replacing any it had), read as [`Budget::time`]
-    /// reads `secs`.
+    /// The same budget with a time limit of `secs` seconds too (replacing any it had), kept as
+    /// given like [`Budget::time`]'s: planners refuse a NaN or negative one with
+    /// [`PlanError::BadInput`] and read more than 10⁹ s as 10⁹ s.
     ///
     /// ```
-    /// use std::time::Duration;
     /// use hearth_planning::planner::Budget;
     ///
     /// let b = Budget::iterations(100).with_time(0.5);
-    /// assert_eq!((b.time, b.iterations), (Some(Duration::from_millis(500)), Some(100)));
-    /// assert_eq!(Budget::time(1.0).with_time(f64::NAN).time, Some(Duration::ZERO));
+    /// assert_eq!((b.time, b.iterations), (Some(0.5), Some(100)));
+    /// // Kept as given, for the planner to refuse.
+    /// assert!(Budget::time(1.0).with_time(f64::NAN).time.is_some_and(f64::is_nan));
+    /// assert_eq!(Budget::time(1.0).with_time(-2.0).time, Some(-2.0));
     /// ```
     pub fn with_time(mut self, secs: f64) -> Self {
-        self.time = Budget::time(secs).time;
+        self.time = Some(secs);
         self
     }
 
-    fn check(&self) -> Result<(), PlanError> {
+    /// Checks that the budget sets a limit and that its time limit is zero or more seconds,
+    /// and returns that time limit (at most [`MAX_TIME`]).
+    fn check(&self) -> Result<Option<Duration>, PlanError> {
         if self.time.is_none() && self.iterations.is_none() {
             return Err(PlanError::BadInput(
                 "the budget sets neither a time nor an iteration limit".to_owned(),
             ));
         }
-        Ok(())
+        match self.time {
+            None => Ok(None),
+            // False for NaN; -0 is a zero duration.
+            Some(secs) if secs >= 0.0 => Ok(Some(Duration::from_secs_f64(secs.min(MAX_TIME)))),
+            Some(secs) => Err(PlanError::BadInput(format!(
+                "the budget's time limit is {secs} s; it must be zero or more seconds"
+            ))),
+        }
     }
 }
 
@@ -289,8 +328,9 @@ pub struct Solution {
 /// A sampling-based planner, generic over the space so the hot loop is monomorphised (no
 /// virtual calls per state).
 ///
-/// Every implementation validates its input first: a budget with no limit, states of the wrong
-/// dimension, non-finite or out of bounds give [`PlanError::BadInput`]; an invalid start
+/// Every implementation validates its input first: a budget with no limit or with a NaN or
+/// negative time limit, states of the wrong dimension, non-finite or out of bounds give
+/// [`PlanError::BadInput`]; an invalid start
 /// [`PlanError::InvalidStart`]; all goals invalid [`PlanError::InvalidGoals`]. Invalid goals
 /// among valid ones are skipped. A run is deterministic for a given generator state and an
 /// iteration-only budget.
@@ -347,6 +387,7 @@ pub trait Planner<S: Space> {
     /// assert!(matches!(plan(vec![0.5, 0.5], Budget::iterations(10)), Err(PlanError::InvalidStart { .. })));
     /// assert!(matches!(plan(vec![2.0, 0.1], Budget::iterations(10)), Err(PlanError::BadInput(_))));
     /// assert!(matches!(plan(vec![0.1, 0.1], Budget::default()), Err(PlanError::BadInput(_))));
+    /// assert!(matches!(plan(vec![0.1, 0.1], Budget::time(-1.0)), Err(PlanError::BadInput(_))));
     /// assert!(matches!(plan(vec![0.1, 0.1], Budget::iterations(0)), Err(PlanError::Timeout { .. })));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
@@ -371,21 +412,23 @@ pub(crate) struct Run {
 }
 
 impl Run {
-    /// Starts the clock and the counters.
+    /// Checks the budget ([`PlanError::BadInput`] for one without a limit or with a NaN or
+    /// negative time limit), then starts the clock and the counters.
     pub(crate) fn start<S: Space, V: StateValidator + ?Sized>(
         budget: &Budget,
         motion: &MotionValidator<S>,
         validator: &V,
-    ) -> Self {
+    ) -> Result<Self, PlanError> {
+        let time = budget.check()?;
         let started = Instant::now();
-        Self {
+        Ok(Self {
             started,
-            deadline: budget.time.and_then(|t| started.checked_add(t)),
+            deadline: time.and_then(|t| started.checked_add(t)),
             max_iterations: budget.iterations.unwrap_or(u64::MAX),
             checks0: validator.checks(),
             motions0: motion.motions(),
             iterations: 0,
-        }
+        })
     }
 
     /// Counts an iteration; false once the budget is spent.
@@ -415,14 +458,13 @@ impl Run {
     }
 }
 
-/// Checks the budget and the request, and returns the valid goals (in request order).
+/// Checks the request and returns the valid goals (in request order); [`Run::start`] checks
+/// the budget.
 pub(crate) fn valid_goals<S: Space, V: StateValidator + ?Sized>(
     space: &S,
     validator: &mut V,
     request: &PlanRequest,
-    budget: &Budget,
 ) -> Result<Vec<Vec<f64>>, PlanError> {
-    budget.check()?;
     space.check(&request.start).map_err(|e| bad_state("start", e))?;
     let goals = request.goal.states();
     if goals.is_empty() {

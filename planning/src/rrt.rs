@@ -113,10 +113,10 @@ impl<S: Space> Planner<S> for Rrt {
                 self.goal_zone_radius
             )));
         }
-        let mut run = Run::start(budget, motion, validator);
+        let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
         let range = resolve_range(space, self.range, 1.0)?;
-        let goals = valid_goals(space, validator, request, budget)?;
+        let goals = valid_goals(space, validator, request)?;
         let dim = space.dim();
         let mut tree = Tree::new(dim);
         tree.add(&request.start, None);

@@ -787,6 +787,55 @@ fn bad_input_is_named() {
     }
 }
 
+/// A NaN or negative time limit is bad input that names the time limit, whichever
+/// constructor set it, and checks nothing; a zero time limit is a valid budget that runs out at
+/// once, and `+∞` sets no time limit.
+#[test]
+fn bad_time_limit_is_named() {
+    for budget in [
+        Budget::time(f64::NAN),
+        Budget::time(-1.0),
+        Budget::time(f64::NEG_INFINITY),
+        Budget::iterations(10).with_time(f64::NAN),
+        Budget::time(1.0).with_time(-1e-9),
+        Budget::time(f64::NAN).with_iterations(10),
+    ] {
+        let mut v = narrow_passage();
+        for (name, r) in every_planner(&passage_request(), &budget, &mut v) {
+            match r {
+                Err(PlanError::BadInput(m)) => assert!(m.contains("time limit"), "{name}: `{m}` for {budget:?}"),
+                other => panic!("{name}: expected BadInput for {budget:?}, got {other:?}"),
+            }
+        }
+        assert_eq!(v.checks(), 0, "{budget:?}: a bad budget checks nothing");
+        let mut prm = LazyPrm::default();
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let r = prm.plan(
+            &mut motion,
+            &mut v,
+            &passage_request(),
+            &budget,
+            &mut Pcg64Mcg::seed_from_u64(1),
+        );
+        assert!(matches!(r, Err(PlanError::BadInput(_))), "{r:?}");
+        assert_eq!(
+            prm.roadmap_size(),
+            0,
+            "{budget:?}: a bad budget leaves the roadmap untouched"
+        );
+    }
+    for (name, r) in every_planner(&passage_request(), &Budget::time(0.0), &mut narrow_passage()) {
+        assert!(matches!(r, Err(PlanError::Timeout { .. })), "{name}: {r:?}");
+    }
+    let unbounded = Budget::time(f64::INFINITY).with_iterations(3);
+    for (name, r) in every_planner(&passage_request(), &unbounded, &mut narrow_passage()) {
+        assert!(
+            matches!(&r, Err(PlanError::Timeout { stats }) if stats.iterations == 3),
+            "{name}: {r:?}"
+        );
+    }
+}
+
 #[test]
 fn invalid_start_and_goals() {
     let in_wall = vec![0.5, 0.1];
@@ -1199,6 +1248,36 @@ fn configuration() -> impl proptest::strategy::Strategy<Value = Vec<f64>> {
     ]
 }
 
+/// A budget's limits, `(iterations, seconds)`: either, both or neither, the time sometimes NaN
+/// or negative. Without an iteration limit the time is at most a millisecond, so that each case
+/// stays quick.
+fn budget_limits() -> impl proptest::strategy::Strategy<Value = (Option<u64>, Option<f64>)> {
+    use proptest::prelude::*;
+    let bad = || prop_oneof![Just(f64::NAN), Just(-1.0), Just(-1e-300), Just(f64::NEG_INFINITY)];
+    let with_iterations = prop_oneof![
+        4 => Just(20.0),
+        1 => prop_oneof![Just(0.0), Just(f64::INFINITY), Just(1e300)],
+        1 => bad(),
+    ];
+    prop_oneof![
+        4 => (1u64..400, with_iterations).prop_map(|(n, t)| (Some(n), Some(t))),
+        1 => (1u64..400).prop_map(|n| (Some(n), None)),
+        2 => prop_oneof![Just(0.0), Just(1e-3), bad()].prop_map(|t| (None, Some(t))),
+        2 => Just((None, None)),
+    ]
+}
+
+/// The budget of those limits, set through the constructors.
+fn budget_of(iterations: Option<u64>, secs: Option<f64>) -> Budget {
+    match (iterations, secs) {
+        (Some(n), Some(t)) if n % 2 == 0 => Budget::iterations(n).with_time(t),
+        (Some(n), Some(t)) => Budget::time(t).with_iterations(n),
+        (Some(n), None) => Budget::iterations(n),
+        (None, Some(t)) => Budget::time(t),
+        (None, None) => Budget::default(),
+    }
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(150))]
 
@@ -1209,26 +1288,27 @@ proptest::proptest! {
     fn any_request_is_planned_or_refused(
         start in configuration(),
         goals in proptest::collection::vec(configuration(), 0..3),
-        iterations in proptest::prop_oneof![proptest::strategy::Just(0u64), 1u64..400],
+        (iterations, secs) in budget_limits(),
     ) {
         let request = PlanRequest::new(start.clone(), Goal::AnyOf(goals.clone()));
-        let budget = if iterations == 0 { Budget::default() } else { budget(iterations) };
+        let budget = budget_of(iterations, secs);
         let inside = |q: &[f64]| q.len() == 2 && q.iter().all(|x| (0.0..=1.0).contains(x));
-        let well_formed = inside(&start) && !goals.is_empty() && goals.iter().all(|g| inside(g)) && iterations > 0;
+        let budget_ok = (iterations.is_some() || secs.is_some()) && secs.is_none_or(|t| t >= 0.0);
+        let well_formed = inside(&start) && !goals.is_empty() && goals.iter().all(|g| inside(g)) && budget_ok;
         let mut region = narrow_passage();
         for (name, r) in every_planner(&request, &budget, &mut region) {
             match r {
                 Ok(s) => {
                     let states = &s.path.states;
-                    proptest::prop_assert!(well_formed, "{name} planned bad input {start:?} {goals:?}");
+                    proptest::prop_assert!(well_formed, "{name} planned bad input {start:?} {goals:?} {budget:?}");
                     proptest::prop_assert_eq!(states.first(), Some(&start), "{}", name);
                     proptest::prop_assert!(goals.iter().any(|g| Some(g) == states.last()), "{name}");
                     proptest::prop_assert!(states.iter().all(|q| inside(q) && (narrow_passage().free)(q)), "{name}: {states:?}");
                 }
-                Err(PlanError::BadInput(m)) => proptest::prop_assert!(!well_formed, "{name}: {m} for {start:?} {goals:?}"),
+                Err(PlanError::BadInput(m)) => proptest::prop_assert!(!well_formed, "{name}: {m} for {start:?} {goals:?} {budget:?}"),
                 Err(e) => proptest::prop_assert!(
                     well_formed && matches!(e, PlanError::Timeout { .. } | PlanError::InvalidStart { .. } | PlanError::InvalidGoals { .. }),
-                    "{name}: {e:?} for {start:?} {goals:?}"
+                    "{name}: {e:?} for {start:?} {goals:?} {budget:?}"
                 ),
             }
         }

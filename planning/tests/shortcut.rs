@@ -492,6 +492,65 @@ fn bad_input_gives_typed_errors() {
     ));
 }
 
+/// A ramp joins two states, `(q0, v0)` and `(q1, v1)`: a NaN or infinite value is reported
+/// against the state it belongs to, 0 or 1, the first one when both are bad.
+#[test]
+fn ramp_names_the_non_finite_state() {
+    let limits = limits2();
+    let ok = [0.5, 0.5];
+    let zero = [0.0, 0.0];
+    for bad in [[f64::NAN, 0.5], [0.5, f64::INFINITY], [f64::NEG_INFINITY, f64::NAN]] {
+        let cases = [
+            (Trajectory::ramp(&bad, &zero, &ok, &zero, &limits), 0),
+            (Trajectory::ramp(&ok, &bad, &ok, &zero, &limits), 0),
+            (Trajectory::ramp(&ok, &zero, &bad, &zero, &limits), 1),
+            (Trajectory::ramp(&ok, &zero, &ok, &bad, &limits), 1),
+            (Trajectory::ramp(&ok, &bad, &bad, &zero, &limits), 0),
+        ];
+        for (case, (r, index)) in cases.into_iter().enumerate() {
+            assert_eq!(
+                r.unwrap_err(),
+                TrajectoryError::NonFinite { index },
+                "case {case}, {bad:?}"
+            );
+        }
+    }
+}
+
+/// Position bounds are numbers (`-∞` below and `+∞` above allowed, for continuous joints) with
+/// lower ≤ upper; anything else is refused, naming the coordinate and both bounds.
+#[test]
+fn position_bounds_are_checked() {
+    let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2]).unwrap();
+    let bounds = |lower: [f64; 2], upper: [f64; 2]| limits.clone().with_position_bounds(lower.to_vec(), upper.to_vec());
+    let (inf, nan) = (f64::INFINITY, f64::NAN);
+    for (lower, upper) in [
+        ([-1.0, -1.0], [1.0, 1.0]),
+        ([-inf, 0.5], [inf, 0.5]),
+        ([-inf, -inf], [inf, -3.0]),
+        ([2.0, 4.0], [inf, inf]),
+    ] {
+        let limits = bounds(lower, upper).unwrap();
+        assert_eq!(limits.position_bounds(), Some((&lower[..], &upper[..])));
+    }
+    for (lower, upper, index) in [
+        ([-1.0, nan], [1.0, 1.0], 1),
+        ([-1.0, -1.0], [nan, 1.0], 0),
+        ([1.0, -1.0], [-1.0, 1.0], 0),
+        ([-1.0, 0.5 + 1e-12], [1.0, 0.5], 1),
+        ([inf, -1.0], [inf, 1.0], 0),
+        ([-1.0, -inf], [1.0, -inf], 1),
+    ] {
+        let e = bounds(lower, upper).unwrap_err();
+        assert!(
+            matches!(e, TrajectoryError::BadPositionBounds { index: i, lower: l, upper: u }
+                if i == index && l.total_cmp(&lower[i]).is_eq() && u.total_cmp(&upper[i]).is_eq()),
+            "{lower:?} {upper:?}: {e:?}"
+        );
+        assert!(e.to_string().contains(&format!("coordinate {index}")), "{e}");
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 

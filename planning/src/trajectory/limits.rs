@@ -154,16 +154,26 @@ impl Limits {
         }
     }
 
-    /// The same limits with position bounds (`±∞` for unbounded coordinates) that generated
-    /// motions must respect. Fails when either list does not have [`Limits::dim`] entries.
+    /// The same limits with position bounds (`-∞` below and `+∞` above for unbounded
+    /// coordinates) that generated motions must respect.
+    ///
+    /// # Errors
+    /// [`TrajectoryError::Dimension`] when either list does not have [`Limits::dim`] entries;
+    /// [`TrajectoryError::BadPositionBounds`] for the first coordinate whose bounds are NaN,
+    /// inverted (lower above upper), a lower bound of `+∞` or an upper bound of `-∞`.
     ///
     /// ```
-    /// use hearth_planning::trajectory::Limits;
+    /// use hearth_planning::trajectory::{Limits, TrajectoryError};
     ///
     /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
     /// let bounded = limits.clone().with_position_bounds(vec![-0.5], vec![0.5])?;
     /// assert_eq!(bounded.position_bounds(), Some((&[-0.5][..], &[0.5][..])));
-    /// assert!(limits.with_position_bounds(vec![], vec![0.5]).is_err());
+    /// assert!(limits.clone().with_position_bounds(vec![f64::NEG_INFINITY], vec![f64::INFINITY]).is_ok());
+    /// assert!(limits.clone().with_position_bounds(vec![], vec![0.5]).is_err());
+    /// assert_eq!(
+    ///     limits.with_position_bounds(vec![0.5], vec![-0.5]).unwrap_err(),
+    ///     TrajectoryError::BadPositionBounds { index: 0, lower: 0.5, upper: -0.5 }
+    /// );
     /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
     /// ```
     pub fn with_position_bounds(mut self, lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, TrajectoryError> {
@@ -174,6 +184,12 @@ impl Limits {
                     expected: self.dim(),
                     got: v.len(),
                 });
+            }
+        }
+        for (index, (&lower, &upper)) in lower.iter().zip(&upper).enumerate() {
+            // False for NaN too.
+            if !(lower <= upper && lower < f64::INFINITY && upper > f64::NEG_INFINITY) {
+                return Err(TrajectoryError::BadPositionBounds { index, lower, upper });
             }
         }
         self.bounds = Some((lower, upper));

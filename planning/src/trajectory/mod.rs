@@ -77,10 +77,24 @@ pub enum TrajectoryError {
         /// Its value.
         value: f64,
     },
-    /// A path state with a NaN or infinite coordinate.
+    /// Position bounds that no number satisfies, or NaN: a lower bound above its upper bound,
+    /// a lower bound of `+∞` or an upper bound of `-∞`.
+    #[error(
+        "position bounds of coordinate {index} are [{lower}, {upper}]; they must be numbers (or -∞ below, +∞ above) with lower ≤ upper"
+    )]
+    BadPositionBounds {
+        /// Coordinate.
+        index: usize,
+        /// Its lower bound.
+        lower: f64,
+        /// Its upper bound.
+        upper: f64,
+    },
+    /// A path state with a NaN or infinite coordinate. [`Trajectory::ramp`] joins two states,
+    /// `(q0, v0)` and `(q1, v1)`: for it, a NaN or infinite position or velocity of state 0 or 1.
     #[error("path state {index} has a non-finite coordinate")]
     NonFinite {
-        /// Index of the state.
+        /// Index of the state (the first such state).
         index: usize,
     },
     /// A path without states.
@@ -403,11 +417,16 @@ impl Trajectory {
     }
 
     /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` within `limits` (Ruckig; with
-    /// unbounded jerk this is the parabolic ramp of acceleration-bounded shortcutting). Fails
-    /// on inputs of the wrong length or with non-finite values, and when Ruckig finds no motion.
+    /// unbounded jerk this is the parabolic ramp of acceleration-bounded shortcutting).
+    ///
+    /// # Errors
+    /// [`TrajectoryError::Dimension`] for an input of the wrong length;
+    /// [`TrajectoryError::NonFinite`] for a NaN or infinite value, with `index` 0 when it is in
+    /// `q0` or `v0` and 1 when it is in `q1` or `v1` (and not in `q0` or `v0`);
+    /// [`TrajectoryError::Generator`] when Ruckig finds no motion.
     ///
     /// ```
-    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    /// use hearth_planning::trajectory::{Limits, Trajectory, TrajectoryError};
     ///
     /// let limits = Limits::new(vec![1.0], vec![2.0], vec![f64::INFINITY])?;
     /// // From 0 at full speed to rest at 1: 0.75 s cruising, then 0.5 s braking over 0.25 rad.
@@ -417,21 +436,19 @@ impl Trajectory {
     /// ramp.sample(ramp.duration(), &mut q, Some(&mut v));
     /// assert!((q[0] - 1.0).abs() < 1e-9 && v[0].abs() < 1e-9);
     /// assert!(Trajectory::ramp(&[0.0, 0.0], &[0.0], &[1.0], &[0.0], &limits).is_err());
+    /// let nan = Trajectory::ramp(&[0.0], &[1.0], &[1.0], &[f64::NAN], &limits);
+    /// assert_eq!(nan.unwrap_err(), TrajectoryError::NonFinite { index: 1 });
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn ramp(q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64], limits: &Limits) -> Result<Self, TrajectoryError> {
         let n = limits.dim();
-        for (what, x) in [("q0", q0), ("v0", v0), ("q1", q1), ("v1", v1)] {
-            if x.len() != n {
-                return Err(TrajectoryError::Dimension {
-                    what,
-                    expected: n,
-                    got: x.len(),
-                });
-            }
-            if x.iter().any(|c| !c.is_finite()) {
-                return Err(TrajectoryError::NonFinite { index: 0 });
-            }
+        // (name, values, state)
+        let inputs = [("q0", q0, 0), ("v0", v0, 0), ("q1", q1, 1), ("v1", v1, 1)];
+        for (what, x, _) in inputs {
+            check_dim_of(what, n, x.len())?;
+        }
+        if let Some((_, _, index)) = inputs.iter().find(|(_, x, _)| x.iter().any(|c| !c.is_finite())) {
+            return Err(TrajectoryError::NonFinite { index: *index });
         }
         let g = generator::between(q0, v0, q1, v1, limits, Sync::Time)?;
         Ok(Self::from_pieces(n, vec![Piece::Generated(Box::new(g))]))
