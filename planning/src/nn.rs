@@ -955,40 +955,31 @@ impl KdTree {
         } else {
             f64::INFINITY
         };
-        // Blocks go four at a time with one sum each, so that the sums' additions overlap.
-        let step = dim * LANES;
-        for (group, lanes) in self.lanes.chunks(4 * step).enumerate() {
-            let mut d2 = [f32x8::ZERO; 4];
-            let blocks = lanes.len() / step;
-            for (axis, (&x, &period)) in query.iter().zip(&self.lane_periods).enumerate() {
-                let (x, period) = (f32x8::splat(x), f32x8::splat(period));
-                for (b, sum) in d2.iter_mut().enumerate().take(blocks) {
-                    let at = b * step + axis * LANES;
-                    let mut lane = [0.0f32; LANES];
-                    lane.copy_from_slice(&lanes[at..at + LANES]);
-                    let mut d = (x - f32x8::new(lane)).abs();
-                    if WRAP {
-                        d = d.min(period - d);
-                    }
-                    *sum += d * d;
+        let query = &query[..dim];
+        for (block, lanes) in self.lanes.chunks_exact(dim * LANES).enumerate() {
+            // One block's weighted squared distances: a sum per state, in coordinate order.
+            let mut sum = f32x8::ZERO;
+            for ((lane, &x), &period) in lanes.chunks_exact(LANES).zip(query).zip(&self.lane_periods) {
+                let mut d = (f32x8::splat(x) - f32x8::new(lane.try_into().expect("LANES values"))).abs();
+                if WRAP {
+                    d = d.min(f32x8::splat(period) - d);
                 }
+                sum += d * d;
             }
-            for (b, sum) in d2.iter().enumerate().take(blocks) {
-                let r = c.radius() + SLACK + slop;
-                let bound = r * r * (1.0 + 1e-5);
-                let bound = if bound < f64::from(f32::MAX) {
-                    bound as f32
-                } else {
-                    f32::INFINITY
-                };
-                let mut pass = sum.simd_le(f32x8::splat(bound)).to_bitmask();
-                while pass != 0 {
-                    let k = (group * 4 + b) * LANES + pass.trailing_zeros() as usize;
-                    pass &= pass - 1;
-                    let Some(&id) = self.ids.get(k) else { break };
-                    if !index.is_removed(id as usize) {
-                        c.offer(space.distance(q, index.state(id as usize)), id);
-                    }
+            let r = c.radius() + SLACK + slop;
+            let bound = r * r * (1.0 + 1e-5);
+            let bound = if bound < f64::from(f32::MAX) {
+                bound as f32
+            } else {
+                f32::INFINITY
+            };
+            let mut pass = sum.simd_le(f32x8::splat(bound)).to_bitmask();
+            while pass != 0 {
+                let k = block * LANES + pass.trailing_zeros() as usize;
+                pass &= pass - 1;
+                let Some(&id) = self.ids.get(k) else { break };
+                if !index.is_removed(id as usize) {
+                    c.offer(space.distance(q, index.state(id as usize)), id);
                 }
             }
         }

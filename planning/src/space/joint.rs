@@ -32,6 +32,8 @@ pub struct JointSpace {
     lower: Vec<f64>,
     upper: Vec<f64>,
     continuous: Vec<bool>,
+    /// Whether any joint is continuous (distances of all-bounded spaces skip the wrap test).
+    any_continuous: bool,
     weights: Vec<f64>,
     velocity_limits: Vec<f64>,
 }
@@ -113,6 +115,7 @@ impl JointSpace {
             lower: lo,
             upper: hi,
             continuous: continuous.to_vec(),
+            any_continuous: continuous.contains(&true),
             weights: vec![1.0; n],
             velocity_limits: vec![f64::INFINITY; n],
         })
@@ -267,10 +270,22 @@ impl Space for JointSpace {
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         debug_assert_eq!(a.len(), self.dim());
         debug_assert_eq!(b.len(), self.dim());
+        // Indexed over equal-length slices, so that the loop carries no bounds checks; the
+        // sum runs in coordinate order either way.
+        let n = self.weights.len().min(a.len()).min(b.len());
+        let (a, b, w) = (&a[..n], &b[..n], &self.weights[..n]);
         let mut sum = 0.0;
-        for (((&x, &y), &c), &w) in a.iter().zip(b).zip(&self.continuous).zip(&self.weights) {
-            let d = w * coordinate_difference(c, x, y);
-            sum += d * d;
+        if self.any_continuous {
+            let c = &self.continuous[..n];
+            for i in 0..n {
+                let d = w[i] * coordinate_difference(c[i], a[i], b[i]);
+                sum += d * d;
+            }
+        } else {
+            for i in 0..n {
+                let d = w[i] * (b[i] - a[i]);
+                sum += d * d;
+            }
         }
         sum.sqrt()
     }
