@@ -81,7 +81,7 @@ fn path_valid(motion: &mut MotionValidator<JointSpace>, path: &Path) -> bool {
 fn rest_to_rest_respects_limits_and_follows_the_path() {
     let (motion, path) = planned(1);
     let t = Trajectory::rest_to_rest(motion.space(), &path, &limits2()).unwrap();
-    let (v, a) = t.peak_velocity_acceleration(1e-4);
+    let (v, a) = t.peak_velocity_acceleration(1e-4).expect("a positive step");
     assert!(v[0] <= 1.0 + 1e-9 && v[1] <= 0.5 + 1e-9, "{v:?}");
     assert!(a[0] <= 2.0 + 1e-6 && a[1] <= 1.0 + 1e-6, "{a:?}");
     let mut q = [0.0; 2];
@@ -113,7 +113,7 @@ fn parabolic_shortcutting_shortens_time_keeps_validity_and_limits() {
             t.check(motion.space(), &mut Walls::default(), 0.0005).is_ok(),
             "seed {seed}: in collision"
         );
-        let (v, a) = t.peak_velocity_acceleration(1e-4);
+        let (v, a) = t.peak_velocity_acceleration(1e-4).expect("a positive step");
         assert!(v[0] <= 1.0 + 1e-6 && v[1] <= 0.5 + 1e-6, "seed {seed}: {v:?}");
         assert!(a[0] <= 2.0 + 1e-3 && a[1] <= 1.0 + 1e-3, "seed {seed}: {a:?}");
         let mut q = [0.0; 2];
@@ -391,7 +391,7 @@ fn jerk_limited_stops_stay_on_edges_and_respect_limits() {
             .fold(f64::INFINITY, f64::min);
         assert!(d < 1e-6, "left the edges by {d} at step {k}");
     }
-    let (v, a) = t.peak_velocity_acceleration(1e-4);
+    let (v, a) = t.peak_velocity_acceleration(1e-4).expect("a positive step");
     assert!(v[0] <= 1.0 + 1e-6 && v[1] <= 0.5 + 1e-6, "{v:?}");
     assert!(a[0] <= 2.0 + 1e-2 && a[1] <= 1.0 + 1e-2, "{a:?}");
 }
@@ -563,7 +563,7 @@ proptest! {
     ) {
         let limits = Limits::new(vec![1.0; 3], vec![3.0, 2.0, 1.0], vec![f64::INFINITY; 3]).unwrap();
         let t = Trajectory::ramp(&q0, &v0, &q1, &v1, &limits).unwrap();
-        let (v, a) = t.peak_velocity_acceleration(1e-4);
+        let (v, a) = t.peak_velocity_acceleration(1e-4).expect("a positive step");
         for i in 0..3 {
             prop_assert!(v[i] <= 1.0 + 1e-6, "v {v:?}");
             prop_assert!(a[i] <= limits.acceleration()[i] * 1.001 + 1e-6, "a {a:?}");

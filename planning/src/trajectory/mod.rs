@@ -67,6 +67,17 @@ pub enum TrajectoryError {
         /// Given length.
         got: usize,
     },
+    /// A sampling step that is not positive and finite, or so small that sampling would not
+    /// end in reasonable time (more than [`Trajectory::MAX_SAMPLES`] samples).
+    #[error("{what} is {value} s; it must be positive, finite and at least the duration / {max_samples}")]
+    BadStep {
+        /// Which step.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// The most samples a step may ask for.
+        max_samples: u64,
+    },
     /// A limit that is not positive (or not finite, where that is required).
     #[error("{what} limit {index} is {value}; it must be positive and finite")]
     BadLimit {
@@ -234,6 +245,13 @@ fn check_dim(limits: &Limits, dim: usize) -> Result<(), TrajectoryError> {
 }
 
 impl Trajectory {
+    /// The most samples [`Trajectory::peak_velocity_acceleration`] takes (10⁸).
+    ///
+    /// ```
+    /// assert_eq!(hearth_planning::trajectory::Trajectory::MAX_SAMPLES, 100_000_000);
+    /// ```
+    pub const MAX_SAMPLES: u64 = 100_000_000;
+
     fn from_pieces(dim: usize, pieces: Vec<Piece>) -> Self {
         let mut t = Self {
             dim,
@@ -623,7 +641,9 @@ impl Trajectory {
     }
 
     /// States along the trajectory no more than `resolution` apart (in the space's distance),
-    /// from the first state to the last, with continuous coordinates wrapped back.
+    /// from the first state to the last, with continuous coordinates wrapped back. A
+    /// `resolution` that is not positive (or NaN) reads as 0.01, as in [`Trajectory::length`]
+    /// and [`Trajectory::check`].
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -655,7 +675,8 @@ impl Trajectory {
         }
     }
 
-    /// Length of the trajectory's path in the space's metric (sampled at `resolution`).
+    /// Length of the trajectory's path in the space's metric (sampled at `resolution`; one that
+    /// is not positive reads as 0.01).
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -695,9 +716,9 @@ impl Trajectory {
         );
     }
 
-    /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
-    /// (midpoints first); `Err` carries the time of the first colliding state found (not
-    /// necessarily the earliest one).
+    /// Checks every state along the trajectory, at most `resolution` apart (one that is not
+    /// positive reads as 0.01), coarse to fine (midpoints first); `Err` carries the time of the
+    /// first colliding state found (not necessarily the earliest one).
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -751,6 +772,10 @@ impl Trajectory {
     /// Largest absolute velocity and acceleration per coordinate, measured by sampling every
     /// `dt` seconds (accelerations by finite differences of velocities).
     ///
+    /// # Errors
+    /// [`TrajectoryError::BadStep`] when `dt` is not positive and finite, or would take more
+    /// than [`Trajectory::MAX_SAMPLES`] samples.
+    ///
     /// ```
     /// use hearth_planning::planner::Path;
     /// use hearth_planning::space::JointSpace;
@@ -759,17 +784,28 @@ impl Trajectory {
     /// let space = JointSpace::new(&[0.0; 2], &[2.0; 2], &[false; 2])?;
     /// let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2])?;
     /// let path = Path { states: vec![vec![0.0, 0.0], vec![2.0, 1.0]] };
-    /// let (v, a) = Trajectory::rest_to_rest(&space, &path, &limits)?.peak_velocity_acceleration(1e-3);
+    /// let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
+    /// let (v, a) = t.peak_velocity_acceleration(1e-3)?;
     /// // The first coordinate moves twice as far, so it sets the pace at its limits.
     /// assert!((v[0] - 1.0).abs() < 1e-6 && (a[0] - 1.0).abs() < 1e-6);
     /// assert!((v[1] - 0.5).abs() < 1e-6 && (a[1] - 0.5).abs() < 1e-6);
+    /// assert!(t.peak_velocity_acceleration(0.0).is_err());
+    /// assert!(t.peak_velocity_acceleration(1e-12).is_err()); // 3 s in 3 · 10¹² samples
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn peak_velocity_acceleration(&self, dt: f64) -> (Vec<f64>, Vec<f64>) {
+    pub fn peak_velocity_acceleration(&self, dt: f64) -> Result<(Vec<f64>, Vec<f64>), TrajectoryError> {
+        let steps = (self.duration() / dt).ceil().max(1.0);
+        if !(dt > 0.0 && dt.is_finite() && steps <= Self::MAX_SAMPLES as f64) {
+            return Err(TrajectoryError::BadStep {
+                what: "the sampling step",
+                value: dt,
+                max_samples: Self::MAX_SAMPLES,
+            });
+        }
+        let steps = steps as usize;
         let n = self.dim;
         let (mut q, mut v, mut prev) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let (mut vmax, mut amax) = (vec![0.0f64; n], vec![0.0f64; n]);
-        let steps = (self.duration() / dt).ceil().max(1.0) as usize;
         self.sample(0.0, &mut q, Some(&mut prev));
         for k in 1..=steps {
             let t = (k as f64 * dt).min(self.duration());
@@ -780,7 +816,7 @@ impl Trajectory {
             }
             prev.copy_from_slice(&v);
         }
-        (vmax, amax)
+        Ok((vmax, amax))
     }
 }
 
