@@ -7,6 +7,13 @@ use crate::model::{ChainSpec, RobotModel};
 use crate::urdf::{LoadOptions, build};
 
 /// A robot shipped with Hearth.
+///
+/// ```
+/// use hearth_kinematics::{BUILTIN_ROBOTS, RobotModel};
+/// let locobot = BUILTIN_ROBOTS.iter().find(|r| r.name == "locobot").unwrap();
+/// assert!(locobot.urdf.contains("<robot"));
+/// assert_eq!(RobotModel::builtin(locobot.name).unwrap().chains().len(), locobot.chains.len());
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinRobot {
     /// Name to load it by (`--robot NAME`).
@@ -49,6 +56,14 @@ const FETCH_ARM_WITH_TORSO: &[&str] = &[
 ];
 
 /// Every built-in robot.
+///
+/// ```
+/// use hearth_kinematics::{BUILTIN_ROBOTS, RobotModel};
+/// assert_eq!(BUILTIN_ROBOTS.len(), 4);
+/// for robot in BUILTIN_ROBOTS {
+///     assert_eq!(RobotModel::builtin(robot.name).unwrap().source_name(), format!("builtin:{}", robot.name));
+/// }
+/// ```
 pub const BUILTIN_ROBOTS: &[BuiltinRobot] = &[
     BuiltinRobot {
         name: "panda",

@@ -36,6 +36,14 @@ pub fn to_vector(p: &Point3<f64>) -> Vector {
 }
 
 /// Converts a parry/rapier pose to a kinematics pose (f32 → f64).
+///
+/// ```
+/// use hearth_kinematics::from_pose;
+/// use parry3d::math::{Pose, Vector};
+/// let iso = from_pose(&Pose::from_translation(Vector::new(0.5, -1.0, 2.0)));
+/// assert_eq!(iso.translation.vector, nalgebra::Vector3::new(0.5, -1.0, 2.0));
+/// assert_eq!(iso.rotation.angle(), 0.0);
+/// ```
 #[inline]
 pub fn from_pose(pose: &Pose) -> Isometry3<f64> {
     let t = pose.translation;

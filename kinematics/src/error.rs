@@ -266,4 +266,15 @@ pub enum KinematicsError {
 }
 
 /// Shorthand for results of this crate.
+///
+/// ```
+/// use hearth_kinematics::{KinematicsError, Result, RobotModel};
+/// fn hand_index(model: &RobotModel) -> Result<usize> {
+///     model.link_index("panda_hand")
+/// }
+/// let panda = RobotModel::builtin("panda")?;
+/// assert!(hand_index(&panda)? > 0);
+/// assert!(matches!(hand_index(&RobotModel::builtin("fetch")?), Err(KinematicsError::UnknownLink { .. })));
+/// # Ok::<(), KinematicsError>(())
+/// ```
 pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;

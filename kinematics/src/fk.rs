@@ -375,16 +375,38 @@ pub struct FkSubset {
 
 impl FkSubset {
     /// Number of links in the subset.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.fk_subset(|_| true).len(), panda.links().len() - 1); // never the root
+    /// assert_eq!(panda.fk_subset(|l| l == 3).len(), 1);
+    /// ```
     pub fn len(&self) -> usize {
         self.ops.len()
     }
 
     /// Whether the subset has no link.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// assert!(panda.fk_subset(|_| false).is_empty());
+    /// assert!(panda.fk_subset(|l| l == panda.root()).is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.ops.is_empty()
     }
 
     /// Whether link `link` is in the subset.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let hand = panda.link_index("panda_hand").unwrap();
+    /// let subset = panda.fk_subset(|l| l == hand);
+    /// assert!(subset.contains(hand) && !subset.contains(panda.root()));
+    /// ```
     pub fn contains(&self, link: usize) -> bool {
         link > 0 && self.ops.binary_search(&((link - 1) as u32)).is_ok()
     }
@@ -393,6 +415,15 @@ impl FkSubset {
 impl RobotModel {
     /// The links for which `select(link)` holds (the root is never part of a subset: it is
     /// where [`RobotModel::fk_from`] places the robot).
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let l4 = panda.link_index("panda_link4").unwrap();
+    /// let after_l4 = panda.fk_subset(|l| panda.is_ancestor(l4, l));
+    /// assert!(after_l4.contains(panda.link_index("panda_hand").unwrap()));
+    /// assert!(!after_l4.contains(panda.link_index("panda_link3").unwrap()));
+    /// ```
     pub fn fk_subset(&self, mut select: impl FnMut(usize) -> bool) -> FkSubset {
         FkSubset {
             ops: (1..self.0.links.len())
@@ -492,6 +523,18 @@ impl RobotModel {
     }
 
     /// Like [`RobotModel::fk`] with the root link placed at `base` (e.g. a mobile base pose).
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// use nalgebra::Isometry3;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let q = panda.neutral_configuration();
+    /// let (mut at_origin, mut moved) = (panda.pose_buffer(), panda.pose_buffer());
+    /// panda.fk(&q, &mut at_origin).unwrap();
+    /// panda.fk_from(&Isometry3::translation(1.0, 0.0, 0.0), &q, &mut moved).unwrap();
+    /// let hand = panda.link_index("panda_hand").unwrap();
+    /// assert!((moved[hand].translation.x - at_origin[hand].translation.x - 1.0).abs() < 1e-12);
+    /// ```
     pub fn fk_from(&self, base: &Isometry3<f64>, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
         self.check_configuration(q)?;
         self.check_link_counts([("pose buffer", poses.len())])?;

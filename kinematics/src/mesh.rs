@@ -10,6 +10,13 @@ use crate::error::{KinematicsError, Result};
 use crate::model::TriangleMesh;
 
 /// How a mesh becomes a collision shape.
+///
+/// ```
+/// use hearth_kinematics::{LoadOptions, MeshCollision};
+/// assert_eq!(MeshCollision::default(), MeshCollision::ConvexHull);
+/// let tight = LoadOptions { mesh_collision: MeshCollision::ConvexDecomposition, ..Default::default() };
+/// assert_ne!(tight.mesh_collision, LoadOptions::default().mesh_collision);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MeshCollision {
@@ -26,9 +33,14 @@ pub enum MeshCollision {
 /// Loads a mesh file (format from the extension: `.stl`, `.obj`, `.dae`), merges its parts and
 /// applies `scale`.
 ///
-/// ```no_run
-/// let mesh = hearth_kinematics::load_mesh(std::path::Path::new("link.stl"), &nalgebra::Vector3::repeat(1.0)).unwrap();
-/// println!("{} triangles", mesh.triangles.len());
+/// ```
+/// use hearth_kinematics::load_mesh;
+/// let path = std::env::temp_dir().join("hearth_doc_load_mesh.obj");
+/// std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+/// let mesh = load_mesh(&path, &nalgebra::Vector3::repeat(2.0)).unwrap();
+/// assert_eq!(mesh.triangles.len(), 1);
+/// assert!(mesh.vertices.contains(&[2.0, 0.0, 0.0])); // scaled
+/// assert!(load_mesh(std::path::Path::new("part.ply"), &nalgebra::Vector3::repeat(1.0)).is_err());
 /// ```
 pub fn load_mesh(path: &Path, scale: &Vector3<f64>) -> Result<TriangleMesh> {
     let ext = path

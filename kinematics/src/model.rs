@@ -11,6 +11,13 @@ use crate::error::{KinematicsError, Result};
 use crate::fk::FkProgram;
 
 /// How a joint moves its child link relative to its parent.
+///
+/// ```
+/// use hearth_kinematics::{JointKind, RobotModel};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let j = panda.joint_index("panda_finger_joint1").unwrap();
+/// assert_eq!(panda.joints()[j].kind, JointKind::Prismatic);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum JointKind {
@@ -26,6 +33,12 @@ pub enum JointKind {
 
 impl JointKind {
     /// The URDF spelling of this kind.
+    ///
+    /// ```
+    /// use hearth_kinematics::JointKind;
+    /// assert_eq!(JointKind::Continuous.as_str(), "continuous");
+    /// assert_eq!(JointKind::Fixed.as_str(), "fixed");
+    /// ```
     pub fn as_str(self) -> &'static str {
         match self {
             JointKind::Revolute => "revolute",
@@ -36,6 +49,12 @@ impl JointKind {
     }
 
     /// Whether the joint moves at all.
+    ///
+    /// ```
+    /// use hearth_kinematics::JointKind;
+    /// assert!(JointKind::Prismatic.is_movable());
+    /// assert!(!JointKind::Fixed.is_movable());
+    /// ```
     pub fn is_movable(self) -> bool {
         self != JointKind::Fixed
     }
@@ -45,6 +64,14 @@ impl JointKind {
 ///
 /// Continuous joints have `lower = -∞`, `upper = +∞`. A velocity or effort written as 0 (or
 /// absent) in the URDF means "unspecified" and is stored as `+∞`.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let j4 = &panda.joints()[panda.joint_index("panda_joint4").unwrap()];
+/// assert!(j4.limits.lower < j4.limits.upper && j4.limits.upper < 0.0);
+/// assert!(j4.limits.velocity > 0.0 && j4.limits.effort > 0.0);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointLimits {
     /// Lower position limit (rad or m).
@@ -58,6 +85,15 @@ pub struct JointLimits {
 }
 
 /// `q_this = multiplier · q_target + offset`.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let f2 = &panda.joints()[panda.joint_index("panda_finger_joint2").unwrap()];
+/// let mimic = f2.mimic.expect("the second finger follows the first");
+/// assert_eq!(panda.joints()[mimic.joint].name, "panda_finger_joint1");
+/// assert_eq!(mimic.multiplier, 1.0);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mimic {
     /// Index of the joint followed (always an independent variable, chains resolved at load).
@@ -69,6 +105,12 @@ pub struct Mimic {
 }
 
 /// Joint damping and friction (used by the simulator).
+///
+/// ```
+/// use hearth_kinematics::Dynamics;
+/// let d = Dynamics::default();
+/// assert_eq!((d.damping, d.friction), (0.0, 0.0));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Dynamics {
     /// Viscous damping.
@@ -78,6 +120,15 @@ pub struct Dynamics {
 }
 
 /// One joint of the tree.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let j1 = &panda.joints()[panda.joint_index("panda_joint1").unwrap()];
+/// assert_eq!(panda.links()[j1.parent].name, "panda_link0");
+/// assert_eq!(panda.links()[j1.child].name, "panda_link1");
+/// assert_eq!(j1.variable, Some(0));
+/// ```
 #[derive(Clone, Debug)]
 pub struct Joint {
     /// Joint name.
@@ -103,6 +154,14 @@ pub struct Joint {
 }
 
 /// Mass properties of a link.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let link1 = &panda.links()[panda.link_index("panda_link1").unwrap()];
+/// let inertial = link1.inertial.as_ref().expect("panda links have mass");
+/// assert!(inertial.mass > 0.0);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Inertial {
     /// Centre-of-mass frame in the link frame.
@@ -114,6 +173,15 @@ pub struct Inertial {
 }
 
 /// A triangle mesh, already scaled, in the geometry's frame.
+///
+/// ```
+/// use hearth_kinematics::TriangleMesh;
+/// let tri = TriangleMesh {
+///     vertices: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+///     triangles: vec![[0, 1, 2]],
+/// };
+/// assert!(tri.triangles.iter().flatten().all(|&i| (i as usize) < tri.vertices.len()));
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
     /// Vertex positions.
@@ -123,6 +191,15 @@ pub struct TriangleMesh {
 }
 
 /// A geometric primitive or mesh as the URDF describes it.
+///
+/// ```
+/// use hearth_kinematics::{Geometry, RobotModel};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let link0 = &panda.links()[panda.root()];
+/// assert!(!link0.collisions.is_empty());
+/// // The built-in Panda is made of primitives only (no mesh files).
+/// assert!(link0.visuals.iter().all(|v| !matches!(v.geometry, Geometry::Mesh { .. })));
+/// ```
 #[derive(Clone, Debug)]
 pub enum Geometry {
     /// A box with these half extents.
@@ -161,6 +238,13 @@ pub enum Geometry {
 }
 
 /// A visual element of a link.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let hand = &panda.links()[panda.link_index("panda_hand").unwrap()];
+/// assert!(!hand.visuals.is_empty());
+/// ```
 #[derive(Clone, Debug)]
 pub struct Visual {
     /// Optional name.
@@ -176,6 +260,14 @@ pub struct Visual {
 }
 
 /// A collision element of a link, with its parry shape.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let hand = &panda.links()[panda.link_index("panda_hand").unwrap()];
+/// let c = &hand.collisions[0];
+/// assert!(c.shape.compute_local_aabb().volume() > 0.0);
+/// ```
 #[derive(Clone)]
 pub struct Collision {
     /// Optional name.
@@ -202,6 +294,14 @@ impl std::fmt::Debug for Collision {
 }
 
 /// One link of the tree.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let root = &panda.links()[panda.root()];
+/// assert_eq!(root.name, "panda_link0");
+/// assert!(root.parent_joint.is_none());
+/// ```
 #[derive(Clone, Debug)]
 pub struct Link {
     /// Link name.
@@ -217,6 +317,13 @@ pub struct Link {
 }
 
 /// A link's collision geometry as one parry shape, in the link frame.
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let shape = panda.link_shape(panda.link_index("panda_link3").unwrap()).unwrap();
+/// assert!(shape.shape.compute_local_aabb().volume() > 0.0);
+/// ```
 #[derive(Clone)]
 pub struct LinkShape {
     /// The shape (a compound when the link has several collision elements).
@@ -226,6 +333,14 @@ pub struct LinkShape {
 }
 
 /// A named ordered subset of joints defined with a model (e.g. Fetch's `arm`).
+///
+/// ```
+/// use hearth_kinematics::RobotModel;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let arm = &panda.chains()[0];
+/// assert_eq!((arm.name.as_str(), arm.tip.as_str()), ("arm", "panda_hand_tcp"));
+/// assert_eq!(arm.joints.len(), 7);
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct ChainSpec {
     /// Chain name.
@@ -294,76 +409,164 @@ impl std::fmt::Debug for RobotModel {
 
 impl RobotModel {
     /// Robot name (the URDF's `<robot name>`).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.name(), "panda");
+    /// ```
     pub fn name(&self) -> &str {
         &self.0.name
     }
 
     /// Where the model came from (file path, `builtin:NAME` or `<string>`).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.source_name(), "builtin:panda");
+    /// ```
     pub fn source_name(&self) -> &str {
         &self.0.source_name
     }
 
     /// All links, parents before children (index 0 is the root).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.links()[0].name, "panda_link0");
+    /// assert!(panda.links().iter().any(|l| l.name == "panda_hand"));
+    /// ```
     pub fn links(&self) -> &[Link] {
         &self.0.links
     }
 
     /// All joints, in URDF order.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.joints()[0].name, "panda_joint1");
+    /// assert_eq!(panda.joints().len(), panda.links().len() - 1); // a tree
+    /// ```
     pub fn joints(&self) -> &[Joint] {
         &self.0.joints
     }
 
     /// Index of the root link.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.links()[panda.root()].name, "panda_link0");
+    /// ```
     pub fn root(&self) -> usize {
         self.0.root
     }
 
     /// Number of configuration variables.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.dof(), panda.variable_names().len());
+    /// assert_eq!(panda.dof(), 8);
+    /// ```
     pub fn dof(&self) -> usize {
         self.0.variables.len()
     }
 
     /// Joint index of each configuration variable.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// for (v, &j) in panda.variables().iter().enumerate() {
+    ///     assert_eq!(panda.joints()[j].variable, Some(v));
+    /// }
+    /// ```
     pub fn variables(&self) -> &[usize] {
         &self.0.variables
     }
 
     /// Joint name of each configuration variable, in `q` order.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.variable_names()[0], "panda_joint1");
+    /// assert_eq!(panda.variable_names().last().unwrap(), "panda_finger_joint1");
+    /// ```
     pub fn variable_names(&self) -> &[String] {
         &self.0.variable_names
     }
 
     /// Lower position limit per variable (`-∞` for continuous joints).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert!(panda.lower().iter().zip(panda.upper()).all(|(lo, hi)| lo < hi));
+    /// ```
     pub fn lower(&self) -> &[f64] {
         &self.0.lower
     }
 
     /// Upper position limit per variable (`+∞` for continuous joints).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let j4 = panda.variable_names().iter().position(|n| n == "panda_joint4").unwrap();
+    /// assert!(panda.upper()[j4] < 0.0); // the elbow cannot straighten fully
+    /// ```
     pub fn upper(&self) -> &[f64] {
         &self.0.upper
     }
 
     /// Velocity limit per variable.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert!(panda.velocity_limits().iter().all(|&v| v > 0.0));
+    /// ```
     pub fn velocity_limits(&self) -> &[f64] {
         &self.0.velocity
     }
 
     /// Effort limit per variable.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.effort_limits().len(), panda.dof());
+    /// assert!(panda.effort_limits().iter().all(|&e| e > 0.0));
+    /// ```
     pub fn effort_limits(&self) -> &[f64] {
         &self.0.effort
     }
 
     /// Named chains that come with the model (built-in robots define them).
+    ///
+    /// ```
+    /// let fetch = hearth_kinematics::RobotModel::builtin("fetch").unwrap();
+    /// assert!(fetch.chains().iter().any(|c| c.name == "head"));
+    /// ```
     pub fn chains(&self) -> &[ChainSpec] {
         &self.0.chains
     }
 
     /// A hash of everything that affects kinematics and collision geometry.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let a = RobotModel::builtin("panda").unwrap();
+    /// let b = RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(a.fingerprint(), b.fingerprint());
+    /// assert_ne!(a.fingerprint(), RobotModel::builtin("locobot").unwrap().fingerprint());
+    /// ```
     pub fn fingerprint(&self) -> u64 {
         self.0.fingerprint
     }
 
     /// Index of a link by name.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let hand = panda.link_index("panda_hand").unwrap();
+    /// assert_eq!(panda.links()[hand].name, "panda_hand");
+    /// assert!(panda.link_index("no_such_link").is_err());
+    /// ```
     pub fn link_index(&self, name: &str) -> Result<usize> {
         self.0
             .link_by_name
@@ -376,6 +579,12 @@ impl RobotModel {
     }
 
     /// Index of a joint by name.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert_eq!(panda.joint_index("panda_joint1").unwrap(), 0);
+    /// assert!(panda.joint_index("no_such_joint").is_err());
+    /// ```
     pub fn joint_index(&self, name: &str) -> Result<usize> {
         self.0
             .joint_by_name
@@ -388,6 +597,12 @@ impl RobotModel {
     }
 
     /// The link's collision geometry merged into one shape, or `None` if it has none.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert!(panda.link_shape(panda.link_index("panda_link1").unwrap()).is_some());
+    /// assert!(panda.link_shape(panda.link_index("panda_hand_tcp").unwrap()).is_none());
+    /// ```
     pub fn link_shape(&self, link: usize) -> Option<&LinkShape> {
         self.0.link_shapes.get(link).and_then(Option::as_ref)
     }
@@ -434,11 +649,24 @@ impl RobotModel {
     }
 
     /// A buffer with one identity pose per link, for [`RobotModel::fk`].
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let poses = panda.pose_buffer();
+    /// assert_eq!(poses.len(), panda.links().len());
+    /// ```
     pub fn pose_buffer(&self) -> Vec<Isometry3<f64>> {
         vec![Isometry3::identity(); self.0.links.len()]
     }
 
     /// A configuration at zero, moved inside the limits where zero is outside them.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let q = panda.neutral_configuration();
+    /// assert_eq!(q[0], 0.0);
+    /// assert_eq!(q[3], panda.upper()[3]); // zero lies above joint 4's range
+    /// ```
     pub fn neutral_configuration(&self) -> Vec<f64> {
         self.0
             .lower
@@ -450,6 +678,15 @@ impl RobotModel {
 
     /// Fills `q` with a configuration drawn uniformly inside the limits (continuous joints
     /// in `[-π, π)`).
+    ///
+    /// ```
+    /// use rand::SeedableRng;
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+    /// let mut q = vec![0.0; panda.dof()];
+    /// panda.random_configuration(&mut rng, &mut q);
+    /// assert!(panda.within_limits(&q, 0.0));
+    /// ```
     pub fn random_configuration<R: Rng + ?Sized>(&self, rng: &mut R, q: &mut [f64]) {
         for ((qi, &lo), &hi) in q.iter_mut().zip(&self.0.lower).zip(&self.0.upper) {
             *qi = sample_interval(rng, lo, hi);
@@ -457,11 +694,27 @@ impl RobotModel {
     }
 
     /// Checks that `q` has the right length and only finite values.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// assert!(panda.check_configuration(&panda.neutral_configuration()).is_ok());
+    /// assert!(panda.check_configuration(&[0.0; 3]).is_err());
+    /// assert!(panda.check_configuration(&[f64::NAN; 8]).is_err());
+    /// ```
     pub fn check_configuration(&self, q: &[f64]) -> Result<()> {
         check_values("configuration", q, &self.0.variable_names)
     }
 
     /// Whether every value of `q` lies within its limits (plus `tolerance`).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let mut q = panda.neutral_configuration();
+    /// assert!(panda.within_limits(&q, 0.0));
+    /// q[0] = panda.upper()[0] + 0.01;
+    /// assert!(!panda.within_limits(&q, 0.0));
+    /// assert!(panda.within_limits(&q, 0.02));
+    /// ```
     pub fn within_limits(&self, q: &[f64], tolerance: f64) -> bool {
         q.len() == self.dof()
             && q.iter()
@@ -471,6 +724,14 @@ impl RobotModel {
     }
 
     /// Position of joint `j` for configuration `q` (mimic joints follow their target).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let mut q = panda.neutral_configuration();
+    /// q[7] = 0.03; // panda_finger_joint1
+    /// let f2 = panda.joint_index("panda_finger_joint2").unwrap();
+    /// assert_eq!(panda.joint_position(&q, f2), 0.03);
+    /// ```
     pub fn joint_position(&self, q: &[f64], j: usize) -> f64 {
         let joint = &self.0.joints[j];
         match (joint.variable, joint.mimic) {
@@ -484,6 +745,13 @@ impl RobotModel {
     }
 
     /// The joints from the root down to `link`, root first.
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let path = panda.joints_to(panda.link_index("panda_link2").unwrap());
+    /// let names: Vec<_> = path.iter().map(|&j| panda.joints()[j].name.as_str()).collect();
+    /// assert_eq!(names, ["panda_joint1", "panda_joint2"]);
+    /// ```
     pub fn joints_to(&self, link: usize) -> Vec<usize> {
         let mut path = Vec::new();
         let mut cur = link;
@@ -496,6 +764,14 @@ impl RobotModel {
     }
 
     /// Whether link `ancestor` lies on the path from the root to `link` (or is `link`).
+    ///
+    /// ```
+    /// let panda = hearth_kinematics::RobotModel::builtin("panda").unwrap();
+    /// let (l1, hand) = (panda.link_index("panda_link1").unwrap(), panda.link_index("panda_hand").unwrap());
+    /// assert!(panda.is_ancestor(l1, hand));
+    /// assert!(!panda.is_ancestor(hand, l1));
+    /// assert!(panda.is_ancestor(hand, hand));
+    /// ```
     pub fn is_ancestor(&self, ancestor: usize, link: usize) -> bool {
         let mut cur = link;
         loop {

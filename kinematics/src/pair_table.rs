@@ -191,6 +191,20 @@ impl PairTable {
     /// Whether the two links provably do not touch in configuration `q_full` (a full
     /// configuration of `model`, the one this table was built for). `false` means "not
     /// certified", not "touching".
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, links_touch};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let (a, b) = (panda.link_index("panda_link5").unwrap(), panda.link_index("panda_link7").unwrap());
+    /// let table = panda.pair_table(a, b).unwrap();
+    /// let mut q = panda.neutral_configuration();
+    /// q[5] = 1.8;
+    /// let mut poses = panda.pose_buffer();
+    /// panda.fk(&q, &mut poses).unwrap();
+    /// assert!(table.certainly_clear(&panda, &q) && !links_touch(&panda, &poses, a, b));
+    /// q[5] = 100.0; // outside the joint's range: never certified
+    /// assert!(!table.certainly_clear(&panda, &q));
+    /// ```
     pub fn certainly_clear(&self, model: &RobotModel, q_full: &[f64]) -> bool {
         let mut t = [0.0f64; 2];
         for (t, ax) in t.iter_mut().zip(&self.axes) {

@@ -3,6 +3,13 @@
 use std::path::{Path, PathBuf};
 
 /// Environment variable with extra package roots (`:`-separated), searched first.
+///
+/// ```
+/// use hearth_kinematics::{PACKAGE_PATH_ENV, PackageResolver};
+/// let env_roots = std::env::var_os(PACKAGE_PATH_ENV).map_or(0, |v| std::env::split_paths(&v).count());
+/// assert!(PackageResolver::new(vec![]).roots().len() >= env_roots.min(1));
+/// assert_eq!(PACKAGE_PATH_ENV, "HEARTH_PACKAGE_PATH");
+/// ```
 pub const PACKAGE_PATH_ENV: &str = "HEARTH_PACKAGE_PATH";
 
 /// Resolves the `filename` of a URDF `<mesh>`.
@@ -31,6 +38,13 @@ pub struct PackageResolver {
 
 impl PackageResolver {
     /// A resolver with these extra roots (searched after the environment variables).
+    ///
+    /// ```
+    /// use hearth_kinematics::PackageResolver;
+    /// use std::path::PathBuf;
+    /// let r = PackageResolver::new(vec![PathBuf::from("/opt/robots")]);
+    /// assert_eq!(r.roots().last().unwrap(), &PathBuf::from("/opt/robots"));
+    /// ```
     pub fn new(extra_roots: Vec<PathBuf>) -> Self {
         let mut roots = Vec::new();
         for var in [PACKAGE_PATH_ENV, "ROS_PACKAGE_PATH"] {
@@ -43,11 +57,29 @@ impl PackageResolver {
     }
 
     /// The roots searched for `package://` URIs (not counting the URDF's folders).
+    ///
+    /// ```
+    /// use hearth_kinematics::PackageResolver;
+    /// use std::path::PathBuf;
+    /// let extra = vec![PathBuf::from("/a"), PathBuf::from("/b")];
+    /// let r = PackageResolver::new(extra.clone());
+    /// assert!(r.roots().ends_with(&extra));
+    /// ```
     pub fn roots(&self) -> &[PathBuf] {
         &self.roots
     }
 
     /// Candidate paths for `uri`, in search order.
+    ///
+    /// ```
+    /// use hearth_kinematics::PackageResolver;
+    /// use std::path::{Path, PathBuf};
+    /// let r = PackageResolver::default();
+    /// let c = r.candidates("package://bot/meshes/a.stl", Some(Path::new("/ws/bot/urdf")));
+    /// assert_eq!(c[0], PathBuf::from("/ws/bot/urdf/bot/meshes/a.stl"));
+    /// assert!(c.contains(&PathBuf::from("/ws/bot/meshes/a.stl"))); // the folder named `bot`
+    /// assert_eq!(r.candidates("meshes/a.stl", Some(Path::new("/ws"))), [PathBuf::from("/ws/meshes/a.stl")]);
+    /// ```
     pub fn candidates(&self, uri: &str, urdf_dir: Option<&Path>) -> Vec<PathBuf> {
         if let Some(rest) = uri.strip_prefix("package://") {
             let (package, sub) = rest.split_once('/').unwrap_or((rest, ""));
@@ -78,6 +110,17 @@ impl PackageResolver {
     }
 
     /// The first candidate that is a file, or the list of candidates tried.
+    ///
+    /// ```
+    /// use hearth_kinematics::PackageResolver;
+    /// let dir = std::env::temp_dir().join("hearth_doc_resolve_fn");
+    /// std::fs::create_dir_all(&dir).unwrap();
+    /// std::fs::write(dir.join("part.stl"), b"solid x\nendsolid x\n").unwrap();
+    /// let r = PackageResolver::default();
+    /// assert_eq!(r.resolve("part.stl", Some(&dir)).unwrap(), dir.join("part.stl"));
+    /// let tried = r.resolve("missing.stl", Some(&dir)).unwrap_err();
+    /// assert_eq!(tried, [dir.join("missing.stl")]);
+    /// ```
     pub fn resolve(&self, uri: &str, urdf_dir: Option<&Path>) -> Result<PathBuf, Vec<PathBuf>> {
         let candidates = self.candidates(uri, urdf_dir);
         match candidates.iter().find(|p| p.is_file()) {

@@ -16,6 +16,14 @@ use crate::error::{KinematicsError, Result};
 use crate::model::RobotModel;
 
 /// Why a pair is not checked.
+///
+/// ```
+/// use hearth_kinematics::{DisabledReason, RobotModel, SelfCollisionMatrix};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let m = SelfCollisionMatrix::adjacent_only(&panda);
+/// let (l3, l4) = (panda.link_index("panda_link3").unwrap(), panda.link_index("panda_link4").unwrap());
+/// assert_eq!(m.reason(l3, l4), Some(DisabledReason::Adjacent));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DisabledReason {
@@ -30,6 +38,13 @@ pub enum DisabledReason {
 }
 
 /// Settings for [`SelfCollisionMatrix::compute`].
+///
+/// ```
+/// use hearth_kinematics::SelfCollisionSettings;
+/// let quick = SelfCollisionSettings { samples: 100, ..Default::default() };
+/// assert_eq!((quick.samples, quick.seed), (100, 0));
+/// assert_eq!(SelfCollisionSettings::default().samples, 10_000);
+/// ```
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct SelfCollisionSettings {
@@ -83,6 +98,14 @@ struct CacheFile {
 
 impl SelfCollisionMatrix {
     /// Only adjacent pairs disabled (no sampling).
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let (l1, l5) = (panda.link_index("panda_link1").unwrap(), panda.link_index("panda_link5").unwrap());
+    /// assert!(m.is_disabled(l1, l1 + 1) && !m.is_disabled(l1, l5));
+    /// ```
     pub fn adjacent_only(model: &RobotModel) -> Self {
         let mut m = Self::empty(model);
         m.mark_adjacent(model);
@@ -91,6 +114,15 @@ impl SelfCollisionMatrix {
     }
 
     /// Computes the matrix by sampling (deterministic for given settings).
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let settings = SelfCollisionSettings { samples: 50, ..Default::default() };
+    /// let m = SelfCollisionMatrix::compute(&panda, &settings);
+    /// assert_eq!(m, SelfCollisionMatrix::compute(&panda, &settings)); // deterministic
+    /// assert!(m.checked_pairs().len() < SelfCollisionMatrix::adjacent_only(&panda).checked_pairs().len());
+    /// ```
     pub fn compute(model: &RobotModel, settings: &SelfCollisionSettings) -> Self {
         let mut m = Self::empty(model);
         m.mark_adjacent(model);
@@ -196,21 +228,59 @@ impl SelfCollisionMatrix {
     }
 
     /// Whether the pair is skipped.
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let (l0, l1) = (panda.link_index("panda_link0").unwrap(), panda.link_index("panda_link1").unwrap());
+    /// assert!(m.is_disabled(l0, l1) && m.is_disabled(l1, l0));
+    /// assert!(m.is_disabled(l0, l0)); // a link never collides with itself
+    /// ```
     pub fn is_disabled(&self, a: usize, b: usize) -> bool {
         a == b || self.disabled.get(a * self.n + b).is_some_and(Option::is_some)
     }
 
     /// Why the pair is skipped, if it is.
+    ///
+    /// ```
+    /// use hearth_kinematics::{DisabledReason, RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let mut m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let (l0, l6) = (panda.link_index("panda_link0").unwrap(), panda.link_index("panda_link6").unwrap());
+    /// assert_eq!(m.reason(l0, l6), None);
+    /// m.disable(l0, l6, DisabledReason::Never);
+    /// assert_eq!(m.reason(l6, l0), Some(DisabledReason::Never));
+    /// ```
     pub fn reason(&self, a: usize, b: usize) -> Option<DisabledReason> {
         self.disabled.get(a * self.n + b).copied().flatten()
     }
 
-    /// Pairs that need checking (both links have geometry), `a < b`.
+    /// Pairs that are not disabled, `a < b`. Links without collision geometry are not
+    /// filtered out here (see [`SelfCollisionMatrix::checked_geometric_pairs`]).
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let pairs = m.checked_pairs();
+    /// assert!(pairs.iter().all(|&(a, b)| a < b && !m.is_disabled(a, b)));
+    /// ```
     pub fn checked_pairs(&self) -> Vec<(usize, usize)> {
         self.checked.clone()
     }
 
     /// Pairs that need checking, restricted to links with geometry in `model`.
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let geometric = m.checked_geometric_pairs(&panda);
+    /// let tcp = panda.link_index("panda_hand_tcp").unwrap(); // a frame without geometry
+    /// assert!(m.checked_pairs().iter().any(|&(a, b)| a == tcp || b == tcp));
+    /// assert!(geometric.iter().all(|&(a, b)| a != tcp && b != tcp));
+    /// ```
     pub fn checked_geometric_pairs(&self, model: &RobotModel) -> Vec<(usize, usize)> {
         self.checked
             .iter()
@@ -220,6 +290,17 @@ impl SelfCollisionMatrix {
     }
 
     /// Marks a pair as never checked (e.g. from a benchmark's allowed-collision list).
+    ///
+    /// ```
+    /// use hearth_kinematics::{DisabledReason, RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let mut m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let (l0, l6) = (panda.link_index("panda_link0").unwrap(), panda.link_index("panda_link6").unwrap());
+    /// let before = m.checked_pairs().len();
+    /// m.disable(l0, l6, DisabledReason::Never);
+    /// assert!(m.is_disabled(l0, l6));
+    /// assert_eq!(m.checked_pairs().len(), before - 1);
+    /// ```
     pub fn disable(&mut self, a: usize, b: usize, why: DisabledReason) {
         if a < self.n && b < self.n && a != b {
             self.set(a, b, why);
@@ -228,6 +309,18 @@ impl SelfCollisionMatrix {
     }
 
     /// The first checked pair in collision for these link poses, if any.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let mut q = panda.neutral_configuration();
+    /// let mut poses = panda.pose_buffer();
+    /// // Fold the elbow and wrist so that the hand comes back against the upper arm.
+    /// Chain::named(&panda, "arm").unwrap().scatter(&[0.0, 1.7, 0.0, -3.0, 0.0, 3.7, 0.0], &mut q);
+    /// panda.fk(&q, &mut poses).unwrap();
+    /// assert!(m.first_collision(&panda, &poses).is_some());
+    /// ```
     pub fn first_collision(&self, model: &RobotModel, poses: &[Isometry3<f64>]) -> Option<(usize, usize)> {
         self.checked
             .iter()
@@ -236,6 +329,13 @@ impl SelfCollisionMatrix {
     }
 
     /// Writes the matrix as JSON.
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let json = SelfCollisionMatrix::adjacent_only(&panda).to_json(&panda, &SelfCollisionSettings::default());
+    /// assert!(json.contains("\"robot\": \"panda\"") && json.contains("adjacent"));
+    /// ```
     pub fn to_json(&self, model: &RobotModel, settings: &SelfCollisionSettings) -> String {
         let mut disabled = Vec::new();
         for a in 0..self.n {
@@ -256,6 +356,17 @@ impl SelfCollisionMatrix {
 
     /// Reads a matrix written by [`SelfCollisionMatrix::to_json`], refusing one computed for
     /// a different model.
+    ///
+    /// ```
+    /// use hearth_kinematics::{KinematicsError, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// let json = m.to_json(&panda, &SelfCollisionSettings::default());
+    /// assert_eq!(SelfCollisionMatrix::from_json(&json, &panda, "mem").unwrap(), m);
+    /// let locobot = RobotModel::builtin("locobot").unwrap();
+    /// let stale = SelfCollisionMatrix::from_json(&json, &locobot, "mem");
+    /// assert!(matches!(stale, Err(KinematicsError::StaleCache { .. })));
+    /// ```
     pub fn from_json(text: &str, model: &RobotModel, source_name: &str) -> Result<Self> {
         let file: CacheFile = serde_json::from_str(text).map_err(|e| KinematicsError::BadCache {
             source_name: source_name.to_owned(),
@@ -280,6 +391,15 @@ impl SelfCollisionMatrix {
     }
 
     /// Saves to a file.
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let path = std::env::temp_dir().join("hearth_doc_scm_save.json");
+    /// let m = SelfCollisionMatrix::adjacent_only(&panda);
+    /// m.save(&path, &panda, &SelfCollisionSettings::default()).unwrap();
+    /// assert_eq!(SelfCollisionMatrix::load(&path, &panda).unwrap(), m);
+    /// ```
     pub fn save(&self, path: &Path, model: &RobotModel, settings: &SelfCollisionSettings) -> Result<()> {
         std::fs::write(path, self.to_json(model, settings)).map_err(|error| KinematicsError::Io {
             path: path.to_path_buf(),
@@ -288,6 +408,16 @@ impl SelfCollisionMatrix {
     }
 
     /// Loads from a file.
+    ///
+    /// ```
+    /// use hearth_kinematics::{KinematicsError, RobotModel, SelfCollisionMatrix};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let path = std::env::temp_dir().join("hearth_doc_scm_load.json");
+    /// std::fs::write(&path, "not json").unwrap();
+    /// let err = SelfCollisionMatrix::load(&path, &panda).unwrap_err();
+    /// assert!(matches!(err, KinematicsError::BadCache { .. }));
+    /// assert!(SelfCollisionMatrix::load(std::path::Path::new("/no/such/file.json"), &panda).is_err());
+    /// ```
     pub fn load(path: &Path, model: &RobotModel) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|error| KinematicsError::Io {
             path: path.to_path_buf(),
@@ -298,6 +428,17 @@ impl SelfCollisionMatrix {
 
     /// Loads from `path` if it holds a matrix for this model, otherwise computes one and
     /// writes it there.
+    ///
+    /// ```
+    /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let path = std::env::temp_dir().join(format!("hearth_doc_scm_{}.json", std::process::id()));
+    /// let settings = SelfCollisionSettings { samples: 20, ..Default::default() };
+    /// let computed = SelfCollisionMatrix::load_or_compute(&path, &panda, &settings).unwrap();
+    /// assert!(path.is_file()); // written for next time
+    /// assert_eq!(SelfCollisionMatrix::load_or_compute(&path, &panda, &settings).unwrap(), computed);
+    /// # std::fs::remove_file(&path).unwrap();
+    /// ```
     pub fn load_or_compute(path: &Path, model: &RobotModel, settings: &SelfCollisionSettings) -> Result<Self> {
         if let Ok(m) = Self::load(path, model) {
             return Ok(m);
@@ -309,6 +450,19 @@ impl SelfCollisionMatrix {
 }
 
 /// Whether the collision shapes of links `a` and `b` intersect at these poses.
+///
+/// ```
+/// use hearth_kinematics::{RobotModel, links_touch};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let mut poses = panda.pose_buffer();
+/// panda.fk(&panda.neutral_configuration(), &mut poses).unwrap();
+/// let link = |name: &str| panda.link_index(name).unwrap();
+/// let (l0, l1, l7) = (link("panda_link0"), link("panda_link1"), link("panda_link7"));
+/// assert!(links_touch(&panda, &poses, l0, l1)); // joined at the base joint
+/// assert!(!links_touch(&panda, &poses, l0, l7));
+/// let tcp = panda.link_index("panda_hand_tcp").unwrap();
+/// assert!(!links_touch(&panda, &poses, tcp, l7)); // no geometry: never touches
+/// ```
 pub fn links_touch(model: &RobotModel, poses: &[Isometry3<f64>], a: usize, b: usize) -> bool {
     let (Some(sa), Some(sb)) = (model.link_shape(a), model.link_shape(b)) else {
         return false;

@@ -74,20 +74,52 @@ pub(crate) fn covers(model: &RobotModel) -> Arc<Vec<Vec<Sphere>>> {
 }
 
 /// Finest grid spacing (m) used to sample a part.
+///
+/// ```
+/// use hearth_kinematics::spheres::{GRID_STEP, TARGET};
+/// assert!(GRID_STEP > 0.0 && GRID_STEP < 0.01); // millimetre scale
+/// assert!(TARGET > 1.0);
+/// ```
 pub const GRID_STEP: f64 = 0.004;
 /// Most grid points one part is sampled with (coarser spacing for big parts).
 const MAX_POINTS_PER_PART: f64 = 4_000.0;
 /// Most balls in one link's cover.
+///
+/// ```
+/// use hearth_kinematics::LinkShape;
+/// use hearth_kinematics::spheres::{MAX_SPHERES, cover};
+/// use parry3d::shape::SharedShape;
+/// // A thin 2 m pole would need far more balls to be covered tightly.
+/// let pole = LinkShape { shape: SharedShape::cylinder(1.0, 0.01), origin: nalgebra::Isometry3::identity() };
+/// assert_eq!(cover(&pole).len(), MAX_SPHERES);
+/// ```
 pub const MAX_SPHERES: usize = 16;
 /// Ball spacing along a link as a fraction of its second extent.
 const SPACING: f64 = 0.35;
 /// A cover is tight enough when its biggest ball is at most this many times half the link's
 /// smallest extent (plus the sampling slack).
+///
+/// ```
+/// use hearth_kinematics::LinkShape;
+/// use hearth_kinematics::spheres::{GRID_STEP, TARGET, cover};
+/// use parry3d::shape::SharedShape;
+/// // A rod of radius 3 cm and length 30 cm: the biggest ball stays near the rod's radius.
+/// let rod = LinkShape { shape: SharedShape::cylinder(0.15, 0.03), origin: nalgebra::Isometry3::identity() };
+/// let biggest = cover(&rod).iter().map(|s| s.radius).fold(0.0, f64::max);
+/// assert!(biggest <= TARGET * 0.03 + 2.0 * GRID_STEP);
+/// ```
 pub const TARGET: f64 = 1.3;
 /// Lloyd iterations.
 const ITERATIONS: usize = 12;
 
 /// A ball in a link's frame.
+///
+/// ```
+/// use hearth_kinematics::spheres::Sphere;
+/// use nalgebra::Point3;
+/// let s = Sphere { center: Point3::new(0.0, 0.0, 0.1), radius: 0.05 };
+/// assert!((Point3::new(0.0, 0.03, 0.1) - s.center).norm() <= s.radius);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
     /// Centre in the link frame.
@@ -157,6 +189,19 @@ fn ball_count(e: [f64; 3]) -> usize {
 /// A cover of `link` by at most [`MAX_SPHERES`] balls (empty if the shape has no finite
 /// extent, in which case callers must fall back to exact tests). More balls are used until
 /// the biggest is within [`TARGET`] of half the link's smallest extent (a rod's radius).
+///
+/// ```
+/// use hearth_kinematics::{LinkShape, spheres::cover};
+/// use nalgebra::{Isometry3, Point3};
+/// use parry3d::shape::SharedShape;
+/// let bar = LinkShape { shape: SharedShape::cuboid(0.3, 0.04, 0.04), origin: Isometry3::translation(0.0, 0.0, 1.0) };
+/// let balls = cover(&bar);
+/// assert!(balls.len() > 1); // a long bar needs several balls
+/// // Every corner of the bar lies in some ball.
+/// for corner in [Point3::new(0.3, 0.04, 1.04), Point3::new(-0.3, -0.04, 0.96)] {
+///     assert!(balls.iter().any(|b| (corner - b.center).norm() <= b.radius));
+/// }
+/// ```
 pub fn cover(link: &LinkShape) -> Vec<Sphere> {
     let pts = samples(link);
     if pts.is_empty() {

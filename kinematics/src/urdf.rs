@@ -36,15 +36,34 @@ pub struct LoadOptions {
 impl RobotModel {
     /// Loads a URDF file (meshes resolved against its folder; see [`PackageResolver`]).
     ///
-    /// ```no_run
-    /// let model = hearth_kinematics::RobotModel::from_urdf_file("robot.urdf").unwrap();
-    /// println!("{} has {} DOF", model.name(), model.dof());
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let path = std::env::temp_dir().join("hearth_doc_from_urdf_file.urdf");
+    /// std::fs::write(&path, r#"<robot name="slider"><link name="rail"/><link name="cart"/>
+    ///   <joint name="slide" type="prismatic"><parent link="rail"/><child link="cart"/>
+    ///   <axis xyz="1 0 0"/><limit lower="0" upper="0.5" effort="5" velocity="1"/></joint></robot>"#).unwrap();
+    /// let model = RobotModel::from_urdf_file(&path).unwrap();
+    /// assert_eq!((model.name(), model.dof(), model.upper()[0]), ("slider", 1, 0.5));
+    /// assert!(RobotModel::from_urdf_file("/no/such/robot.urdf").is_err());
     /// ```
     pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<Self> {
         Self::from_urdf_file_with(path, &LoadOptions::default())
     }
 
     /// Loads a URDF file with options.
+    ///
+    /// ```
+    /// use hearth_kinematics::{LoadOptions, MeshCollision, RobotModel};
+    /// let dir = std::env::temp_dir().join("hearth_doc_urdf_with");
+    /// std::fs::create_dir_all(&dir).unwrap();
+    /// std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    /// let urdf = r#"<robot name="plate"><link name="base">
+    ///   <collision><geometry><mesh filename="tri.obj"/></geometry></collision></link></robot>"#;
+    /// std::fs::write(dir.join("plate.urdf"), urdf).unwrap();
+    /// let options = LoadOptions { mesh_collision: MeshCollision::TriMesh, ..Default::default() };
+    /// let m = RobotModel::from_urdf_file_with(dir.join("plate.urdf"), &options).unwrap();
+    /// assert!(m.link_shape(0).unwrap().shape.as_trimesh().is_some());
+    /// ```
     pub fn from_urdf_file_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Self> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|error| KinematicsError::Io {
@@ -77,6 +96,17 @@ impl RobotModel {
     }
 
     /// Loads URDF text with options and a name used in error messages.
+    ///
+    /// ```
+    /// use hearth_kinematics::{LoadOptions, RobotModel};
+    /// let bad = r#"<robot name="broken"><link name="a"/><joint name="j" type="fixed">
+    ///   <parent link="a"/><child link="nowhere"/></joint></robot>"#;
+    /// let err = RobotModel::from_urdf_str_with(bad, "broken.urdf", None, &LoadOptions::default()).unwrap_err();
+    /// assert!(err.to_string().contains("broken.urdf"));
+    /// let one_link = r#"<robot name="r"><link name="a"/></robot>"#;
+    /// let ok = RobotModel::from_urdf_str_with(one_link, "r.urdf", None, &LoadOptions::default()).unwrap();
+    /// assert_eq!(ok.source_name(), "r.urdf");
+    /// ```
     pub fn from_urdf_str_with(
         text: &str,
         source_name: &str,

@@ -79,6 +79,14 @@ pub struct ArmSettings {
 
 impl ArmSettings {
     /// Settings for the Fetch: `arm_with_torso` to `gripper_link`, base and wheels as support.
+    ///
+    /// ```
+    /// use hearth_skills::kinematics::{Chain, RobotModel};
+    /// let s = hearth_skills::ArmSettings::fetch();
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// assert_eq!(Chain::named(&fetch, &s.chain).unwrap().dof(), 8);
+    /// assert!(s.support_links.iter().all(|l| fetch.link_index(l).is_ok()));
+    /// ```
     pub fn fetch() -> Self {
         Self {
             chain: "arm_with_torso".into(),
@@ -247,6 +255,13 @@ pub struct LinearMove {
 
 impl LinearMove {
     /// A move at 0.1 m/s with a 60 N force limit, 1 cm IK steps, checked against the world.
+    ///
+    /// ```
+    /// use hearth_skills::arm::LinearMove;
+    /// let lift = LinearMove::new(nalgebra::Vector3::z(), 0.15);
+    /// assert_eq!((lift.distance, lift.speed, lift.step), (0.15, 0.1, 0.01));
+    /// assert!(lift.check_world && lift.ignore.is_empty());
+    /// ```
     pub fn new(direction: Vector3<f64>, distance: f64) -> Self {
         Self {
             direction,
@@ -287,6 +302,15 @@ pub struct PoseMove {
 
 impl PoseMove {
     /// 0.1 s per step, 60 N, checked against the world.
+    ///
+    /// ```
+    /// use hearth_skills::arm::PoseMove;
+    /// use nalgebra::Isometry3;
+    /// let arc: Vec<_> = (0..5).map(|i| Isometry3::translation(0.6, 0.01 * i as f64, 0.9)).collect();
+    /// let m = PoseMove::new(arc);
+    /// assert_eq!((m.poses.len(), m.step_time), (5, 0.1));
+    /// assert!(m.check_world && m.free_axis.is_none());
+    /// ```
     pub fn new(poses: Vec<Isometry3<f64>>) -> Self {
         Self {
             poses,
@@ -387,6 +411,21 @@ impl Arm {
     /// # Errors
     /// [`SkillError::BadInput`] for an unknown chain or tip or unusable settings;
     /// [`SkillError::World`] for an unknown robot.
+    ///
+    /// ```
+    /// use hearth_sim::kinematics::RobotModel;
+    /// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// use hearth_skills::arm::{Arm, ArmSettings};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let locobot = RobotModel::builtin("locobot").unwrap();
+    /// let robot = world.spawn_model(&locobot, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let settings = ArmSettings { chain: "arm".into(), support_links: vec![], ..ArmSettings::fetch() };
+    /// let arm = Arm::new(&world, robot, settings.clone())?;
+    /// assert_eq!(arm.chain().dof(), 5);
+    /// let bad = ArmSettings { chain: "leg".into(), ..settings };
+    /// assert_eq!(Arm::new(&world, robot, bad).unwrap_err().reason(), "bad_input");
+    /// # Ok::<(), hearth_skills::SkillError>(())
+    /// ```
     pub fn new(world: &World, robot: ModelHandle, settings: ArmSettings) -> SkillResult<Self> {
         let model = world.model(robot)?.clone();
         let chain = Chain::named(&model, &settings.chain)

@@ -71,6 +71,14 @@ impl SkillError {
     /// A short snake_case code for reports and RL `info`: `bad_input`, `unreachable`,
     /// `ik_failed`, `planning_timeout`, `planning_failed`, `collision`, `blocked`, `slipped`,
     /// `not_held`, `not_finished`, `no_effect`, `world`, `sensor`, `kinematics`, `scene`.
+    ///
+    /// ```
+    /// use hearth_skills::SkillError;
+    /// assert_eq!(SkillError::BadInput("pixel outside the image".into()).reason(), "bad_input");
+    /// let e = SkillError::NotHeld("the gripper closed on nothing".into());
+    /// assert_eq!(e.reason(), "not_held");
+    /// assert!(e.to_string().contains("closed on nothing"));
+    /// ```
     pub fn reason(&self) -> &'static str {
         match self {
             Self::BadInput(_) => "bad_input",
@@ -102,4 +110,13 @@ impl From<PlanError> for SkillError {
 }
 
 /// Result of a skill.
+///
+/// ```
+/// use hearth_skills::{SkillError, SkillResult};
+/// fn checked_speed(v: f64) -> SkillResult<f64> {
+///     if v.is_finite() && v > 0.0 { Ok(v) } else { Err(SkillError::BadInput(format!("speed {v}"))) }
+/// }
+/// assert_eq!(checked_speed(0.5).unwrap(), 0.5);
+/// assert_eq!(checked_speed(-1.0).unwrap_err().reason(), "bad_input");
+/// ```
 pub type SkillResult<T> = Result<T, SkillError>;

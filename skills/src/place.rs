@@ -6,7 +6,7 @@
 //! footprint inside the surface, clear of everything else on it. Surfaces are rectangles in the world frame: the top
 //! of a model ([`PlaceTarget::on_top_of`]), every free top face of its collision parts (a
 //! worktop, a shelf, the floor of a sink's basin: [`PlaceTarget::surfaces_of`]), an asset's
-//! [`Surface`](hearth_sim::assets::Surface) posed in the world ([`PlaceTarget::from_surface`]),
+//! [`Surface`] posed in the world ([`PlaceTarget::from_surface`]),
 //! or any rectangle.
 
 use hearth_kinematics::to_pose;
@@ -179,6 +179,15 @@ impl PlaceTarget {
     ///
     /// # Errors
     /// [`SkillError::BadInput`] naming the problem.
+    ///
+    /// ```
+    /// use hearth_skills::PlaceTarget;
+    /// let shelf = PlaceTarget { z: 0.8, min: [1.0, -0.2], max: [1.4, 0.2], support: None };
+    /// assert!(shelf.validate().is_ok());
+    /// let empty = PlaceTarget { min: [1.5, -0.2], ..shelf.clone() };
+    /// assert_eq!(empty.validate().unwrap_err().reason(), "bad_input");
+    /// assert!(PlaceTarget { z: f64::NAN, ..shelf }.validate().is_err());
+    /// ```
     pub fn validate(&self) -> SkillResult<()> {
         let finite = self.z.is_finite() && self.min.iter().chain(&self.max).all(|x| x.is_finite());
         if !finite || self.min[0] > self.max[0] || self.min[1] > self.max[1] {

@@ -13,6 +13,14 @@ use crate::error::{KinematicsError, Result};
 use crate::model::RobotModel;
 
 /// What the end effector should reach.
+///
+/// ```
+/// use hearth_kinematics::IkTarget;
+/// use hearth_kinematics::nalgebra::{Isometry3, Point3};
+/// let reach = IkTarget::Position(Point3::new(0.4, 0.0, 0.5));
+/// let grasp = IkTarget::Pose(Isometry3::translation(0.4, 0.0, 0.5));
+/// assert_ne!(reach, grasp);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IkTarget {
     /// Full pose (position and orientation) of the tool frame in the world (robot root) frame.
@@ -40,6 +48,13 @@ impl IkTarget {
 }
 
 /// The step rule.
+///
+/// ```
+/// use hearth_kinematics::{IkMethod, IkSettings};
+/// assert_eq!(IkSettings::default().method, IkMethod::Dls);
+/// let exact = IkSettings { method: IkMethod::Qp, ..Default::default() };
+/// assert_eq!(exact.method, IkMethod::Qp);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum IkMethod {
@@ -103,6 +118,19 @@ impl Default for IkSettings {
 }
 
 /// A solution.
+///
+/// ```
+/// use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, RobotModel};
+/// use rand::SeedableRng;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let settings = IkSettings { time_limit: None, ..Default::default() };
+/// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand_tcp", settings).unwrap();
+/// let seed = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0];
+/// let target = IkTarget::Position(ik.tool_pose(&seed).unwrap().translation.vector.into());
+/// let sol = ik.solve(&target, &seed, &mut rand_pcg::Pcg64Mcg::seed_from_u64(0)).unwrap();
+/// assert_eq!((sol.attempts, sol.orientation_error), (1, 0.0)); // the seed already fits
+/// assert!(sol.position_error <= 1e-3);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct IkSolution {
     /// Chain configuration.
@@ -118,6 +146,19 @@ pub struct IkSolution {
 }
 
 /// Why IK found nothing.
+///
+/// ```
+/// use hearth_kinematics::{Chain, IkError, IkSettings, IkSolver, IkTarget, RobotModel};
+/// use hearth_kinematics::nalgebra::Point3;
+/// use rand::SeedableRng;
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let settings = IkSettings { max_attempts: 3, time_limit: None, ..Default::default() };
+/// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand_tcp", settings).unwrap();
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let far = IkTarget::Position(Point3::new(5.0, 0.0, 0.0)); // out of reach
+/// assert!(matches!(ik.solve(&far, &[0.0; 7], &mut rng), Err(IkError::NotFound { attempts: 3, .. })));
+/// assert!(matches!(ik.solve(&far, &[0.0; 2], &mut rng), Err(IkError::Input(_))));
+/// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum IkError {
@@ -199,6 +240,15 @@ impl std::fmt::Debug for IkSolver {
 impl IkSolver {
     /// A solver for `chain` moving link `tip`. Joints outside the chain are held at the
     /// model's neutral configuration (see [`IkSolver::set_reference`]).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = Chain::named(&panda, "arm").unwrap();
+    /// let ik = IkSolver::new(arm.clone(), "panda_hand", IkSettings::default()).unwrap();
+    /// assert_eq!(ik.tip(), panda.link_index("panda_hand").unwrap());
+    /// assert!(IkSolver::new(arm, "no_such_link", IkSettings::default()).is_err());
+    /// ```
     pub fn new(chain: Chain, tip: &str, settings: IkSettings) -> Result<Self> {
         let model = chain.model().clone();
         let tip = model.link_index(tip)?;
@@ -239,12 +289,40 @@ impl IkSolver {
     }
 
     /// Sets the tool frame: the target is for `tip_pose · tool` (e.g. a fingertip offset).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// use hearth_kinematics::nalgebra::Isometry3;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = Chain::named(&panda, "arm").unwrap();
+    /// let q = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0];
+    /// let mut tcp = IkSolver::new(arm.clone(), "panda_hand_tcp", IkSettings::default()).unwrap();
+    /// let mut tooled = IkSolver::new(arm, "panda_hand", IkSettings::default())
+    ///     .unwrap()
+    ///     .with_tool(Isometry3::translation(0.0, 0.0, 0.1034)); // the hand-to-TCP offset
+    /// let (a, b) = (tooled.tool_pose(&q).unwrap(), tcp.tool_pose(&q).unwrap());
+    /// assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+    /// ```
     pub fn with_tool(mut self, tool: Isometry3<f64>) -> Self {
         self.tool = tool;
         self
     }
 
     /// Sets the full configuration that joints outside the chain keep.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let arm = Chain::named(&fetch, "arm").unwrap();
+    /// let mut ik = IkSolver::new(arm, "gripper_link", IkSettings::default()).unwrap();
+    /// let low = ik.tool_pose(&[0.0; 7]).unwrap();
+    /// let mut q_full = fetch.neutral_configuration();
+    /// q_full[fetch.variable_names().iter().position(|n| n == "torso_lift_joint").unwrap()] = 0.3;
+    /// ik.set_reference(&q_full).unwrap(); // raise the torso, which the arm chain does not move
+    /// let high = ik.tool_pose(&[0.0; 7]).unwrap();
+    /// assert!((high.translation.z - low.translation.z - 0.3).abs() < 1e-9);
+    /// assert!(ik.set_reference(&[0.0; 2]).is_err());
+    /// ```
     pub fn set_reference(&mut self, q_full: &[f64]) -> Result<()> {
         self.model.check_configuration(q_full)?;
         self.q_full.copy_from_slice(q_full);
@@ -252,11 +330,27 @@ impl IkSolver {
     }
 
     /// The settings.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let settings = IkSettings { max_attempts: 5, ..Default::default() };
+    /// let ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand", settings).unwrap();
+    /// assert_eq!(ik.settings().max_attempts, 5);
+    /// ```
     pub fn settings(&self) -> &IkSettings {
         &self.settings
     }
 
     /// Replaces the settings (the QP solver is built when first needed).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkMethod, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand", IkSettings::default()).unwrap();
+    /// ik.set_settings(IkSettings { method: IkMethod::Qp, ..Default::default() });
+    /// assert_eq!(ik.settings().method, IkMethod::Qp);
+    /// ```
     pub fn set_settings(&mut self, settings: IkSettings) {
         if settings.method == IkMethod::Qp && self.qp.is_none() {
             self.qp = qp::QpStep::new(self.chain.dof());
@@ -265,16 +359,45 @@ impl IkSolver {
     }
 
     /// The chain being solved.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand", IkSettings::default()).unwrap();
+    /// assert_eq!(ik.chain().dof(), 7);
+    /// ```
     pub fn chain(&self) -> &Chain {
         &self.chain
     }
 
     /// The tip link index.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand", IkSettings::default()).unwrap();
+    /// assert_eq!(panda.links()[ik.tip()].name, "panda_hand");
+    /// ```
     pub fn tip(&self) -> usize {
         self.tip
     }
 
     /// The tool-frame pose for chain configuration `q` (forward kinematics of the tip).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, RobotModel};
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = Chain::named(&panda, "arm").unwrap();
+    /// let mut ik = IkSolver::new(arm, "panda_hand_tcp", IkSettings::default()).unwrap();
+    /// let q = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0];
+    /// let mut q_full = panda.neutral_configuration();
+    /// q_full[..7].copy_from_slice(&q);
+    /// let mut poses = panda.pose_buffer();
+    /// panda.fk(&q_full, &mut poses).unwrap();
+    /// let tcp = ik.tool_pose(&q).unwrap();
+    /// assert!((tcp.translation.vector - poses[ik.tip()].translation.vector).norm() < 1e-12);
+    /// assert!(ik.tool_pose(&[0.0; 3]).is_err());
+    /// ```
     pub fn tool_pose(&mut self, q: &[f64]) -> Result<Isometry3<f64>> {
         self.chain.check(q)?;
         Ok(self.eval(q))
@@ -305,6 +428,19 @@ impl IkSolver {
     }
 
     /// Solves IK from `seed` (a chain configuration).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, RobotModel};
+    /// use rand::SeedableRng;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let settings = IkSettings { time_limit: None, ..Default::default() };
+    /// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand_tcp", settings).unwrap();
+    /// let target = ik.tool_pose(&[0.2, -0.3, 0.1, -2.0, 0.0, 1.8, 0.6]).unwrap();
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    /// let sol = ik.solve(&IkTarget::Pose(target), &[0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0], &mut rng).unwrap();
+    /// let reached = ik.tool_pose(&sol.q).unwrap();
+    /// assert!((reached.translation.vector - target.translation.vector).norm() <= 1e-3);
+    /// ```
     pub fn solve<R: Rng + ?Sized>(
         &mut self,
         target: &IkTarget,
@@ -316,6 +452,20 @@ impl IkSolver {
 
     /// Solves IK, accepting only solutions for which `accept` returns `true` (e.g. collision
     /// free); rejected solutions trigger a restart.
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, RobotModel};
+    /// use rand::SeedableRng;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let settings = IkSettings { time_limit: None, ..Default::default() };
+    /// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand_tcp", settings).unwrap();
+    /// let pose = ik.tool_pose(&[0.3, -0.3, 0.0, -2.0, 0.0, 1.8, 0.0]).unwrap();
+    /// let target = IkTarget::Position(pose.translation.vector.into());
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+    /// // Only solutions with the first joint turned left.
+    /// let sol = ik.solve_with(&target, &[0.5, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0], &mut rng, |q| q[0] > 0.0).unwrap();
+    /// assert!(sol.q[0] > 0.0);
+    /// ```
     pub fn solve_with<R: Rng + ?Sized, F: FnMut(&[f64]) -> bool>(
         &mut self,
         target: &IkTarget,
@@ -503,6 +653,22 @@ impl IkSolver {
     }
 
     /// The best configuration reached by the last failed solve (for diagnostics).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, RobotModel};
+    /// use hearth_kinematics::nalgebra::Point3;
+    /// use rand::SeedableRng;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let settings = IkSettings { max_attempts: 2, time_limit: None, ..Default::default() };
+    /// let mut ik = IkSolver::new(Chain::named(&panda, "arm").unwrap(), "panda_hand_tcp", settings).unwrap();
+    /// let far = IkTarget::Position(Point3::new(3.0, 0.0, 0.3));
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+    /// assert!(ik.solve(&far, &[0.0; 7], &mut rng).is_err());
+    /// let best = ik.best_effort().to_vec();
+    /// assert_eq!(best.len(), 7);
+    /// // The arm stretched towards the target: the TCP ends up well out in +x.
+    /// assert!(ik.tool_pose(&best).unwrap().translation.x > 0.5);
+    /// ```
     pub fn best_effort(&self) -> &[f64] {
         &self.best
     }

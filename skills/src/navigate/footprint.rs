@@ -34,6 +34,14 @@ impl BaseFootprint {
     /// 0.32 m (the torso's back corners reach 0.321 m, the base 0.30 m), 3 cm clearance,
     /// 1.12 m tall; `locobot` 0.25 m (the gripper reaches 0.243 m), 8 mm, 0.64 m;
     /// `turtlebot` 0.245 m (the plates, set back, reach 0.240 m), 8 mm, 0.44 m.
+    ///
+    /// ```
+    /// use hearth_skills::navigate::BaseFootprint;
+    /// let locobot = BaseFootprint::for_builtin("locobot").unwrap();
+    /// assert_eq!(locobot.radius, 0.25);
+    /// assert!(locobot.z_max < BaseFootprint::for_builtin("fetch").unwrap().z_max);
+    /// assert!(BaseFootprint::for_builtin("panda").is_none()); // not a wheeled robot
+    /// ```
     pub fn for_builtin(robot: &str) -> Option<Self> {
         let (radius, z_min, z_max) = match robot {
             "fetch" => (0.32, 0.03, 1.12),
@@ -98,6 +106,17 @@ pub struct FootprintValidity<O: Obstacles> {
 
 impl<O: Obstacles> FootprintValidity<O> {
     /// A validator of `footprint` against `obstacles` (apply any margin on the view).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::StateValidator;
+    /// use hearth_skills::navigate::{BaseFootprint, FootprintValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// // A 2 cm rug lies below the footprint's floor clearance: it never blocks the base.
+    /// let rug = Obstacle::cuboid("rug", Pose::translation(0.0, 0.0, 0.01), Vector::new(1.0, 1.0, 0.01));
+    /// let mut v = FootprintValidity::new(ParryScene::new(vec![rug]), BaseFootprint::for_builtin("fetch").unwrap());
+    /// assert!(v.is_valid(&[0.0, 0.0, 0.0]));
+    /// ```
     pub fn new(obstacles: O, footprint: BaseFootprint) -> Self {
         let half = ((footprint.z_max - footprint.z_min) / 2.0) as f32;
         Self {
@@ -112,11 +131,34 @@ impl<O: Obstacles> FootprintValidity<O> {
     }
 
     /// Treats states within `radius` of `point` as valid (`None` turns this off).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_planning::validity::StateValidator;
+    /// use hearth_skills::navigate::{BaseFootprint, FootprintValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// let chair = Obstacle::cuboid("chair", Pose::translation(0.4, 0.0, 0.4), Vector::new(0.2, 0.2, 0.4));
+    /// let mut v = FootprintValidity::new(ParryScene::new(vec![chair]), BaseFootprint::for_builtin("fetch").unwrap());
+    /// assert!(!v.is_valid(&[0.0, 0.0, 0.0])); // the base stands against the chair
+    /// v.set_free_near(Some(([0.0, 0.0], 0.1)));
+    /// assert!(v.is_valid(&[0.05, 0.0, 0.0]) && !v.is_valid(&[0.2, 0.0, 0.0]));
+    /// v.set_free_near(None);
+    /// assert!(!v.is_valid(&[0.0, 0.0, 0.0]));
+    /// ```
     pub fn set_free_near(&mut self, near: Option<([f64; 2], f64)>) {
         self.free_near = near;
     }
 
     /// The obstacle view.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_skills::navigate::{BaseFootprint, FootprintValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// let box_ = Obstacle::cuboid("box", Pose::translation(2.0, 0.0, 0.2), Vector::new(0.2, 0.2, 0.2));
+    /// let v = FootprintValidity::new(ParryScene::new(vec![box_]), BaseFootprint::for_builtin("locobot").unwrap());
+    /// assert_eq!(v.obstacles().len(), 1);
+    /// ```
     pub fn obstacles(&self) -> &O {
         &self.obstacles
     }
@@ -127,6 +169,17 @@ impl<O: Obstacles> FootprintValidity<O> {
 
     /// The distance from the footprint at `q` to the nearest obstacle (beyond the view's
     /// margin), or `max` when nothing is that close.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_skills::navigate::{BaseFootprint, FootprintValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// let wall = Obstacle::cuboid("wall", Pose::translation(2.0, 0.0, 1.0), Vector::new(0.05, 3.0, 1.0));
+    /// let fp = BaseFootprint::for_builtin("locobot").unwrap();
+    /// let v = FootprintValidity::new(ParryScene::new(vec![wall]), fp);
+    /// assert!((v.clearance(&[1.0, 0.0, 0.0], 5.0) - (0.95 - fp.radius)).abs() < 1e-4);
+    /// assert_eq!(v.clearance(&[-3.0, 0.0, 0.0], 1.0), 1.0); // nothing within 1 m
+    /// ```
     pub fn clearance(&self, q: &[f64], max: f64) -> f64 {
         self.obstacles
             .distance(&self.shape, &self.pose(q), max as f32)
@@ -135,6 +188,16 @@ impl<O: Obstacles> FootprintValidity<O> {
 
     /// The name of an obstacle the footprint touches at `q`, `None` when it is clear (the
     /// free-near exception does not apply here).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ParryScene};
+    /// use hearth_skills::navigate::{BaseFootprint, FootprintValidity};
+    /// use parry3d::math::{Pose, Vector};
+    /// let table = Obstacle::cuboid("table", Pose::translation(1.0, 0.0, 0.4), Vector::new(0.5, 0.5, 0.4));
+    /// let v = FootprintValidity::new(ParryScene::new(vec![table]), BaseFootprint::for_builtin("fetch").unwrap());
+    /// assert_eq!(v.touching(&[0.3, 0.0, 0.0]).as_deref(), Some("table"));
+    /// assert_eq!(v.touching(&[-1.0, 0.0, 0.0]), None);
+    /// ```
     pub fn touching(&self, q: &[f64]) -> Option<String> {
         let id = self.obstacles.first_hit(&self.shape, &self.pose(q))?;
         Some(self.obstacles.name(id).unwrap_or("an unnamed obstacle").to_owned())

@@ -146,6 +146,15 @@ impl Default for NavigateSettings {
 
 impl NavigateSettings {
     /// Checks every number; [`SkillError::BadInput`] names the first bad one.
+    ///
+    /// ```
+    /// use hearth_skills::navigate::NavigateSettings;
+    /// assert!(NavigateSettings::default().validate().is_ok());
+    /// let bad = NavigateSettings { max_linear_speed: 0.0, ..Default::default() };
+    /// let err = bad.validate().unwrap_err();
+    /// assert_eq!(err.reason(), "bad_input");
+    /// assert!(err.to_string().contains("max_linear_speed"));
+    /// ```
     pub fn validate(&self) -> SkillResult<()> {
         let positive = [
             ("position_tolerance", self.position_tolerance),
@@ -305,6 +314,28 @@ impl Navigator {
 
     /// Plans a path from the base's current pose to `goal` (`[x, y, yaw]`) without moving
     /// anything (see the [module docs](self) for the steps and errors).
+    ///
+    /// ```
+    /// # use hearth_sim::assets::RoomType;
+    /// # use hearth_sim::scene::{MapOptions, RobotPlacement, Room, SceneFile, SceneMaps, Wall};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// use hearth_skills::navigate::{NavigateSettings, Navigator};
+    /// use rand::SeedableRng;
+    /// # let mut scene = SceneFile::empty("one room");
+    /// # let polygon = vec![[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]];
+    /// # scene.building.rooms.push(Room { name: "office".into(), room_type: RoomType::Office, polygon });
+    /// # scene.robot = Some(RobotPlacement { name: "turtlebot".into(), position: [1.0, 1.5, 0.0], yaw: 0.0 });
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let robot = world.load_scene(&scene).unwrap().robot.unwrap();
+    /// # let maps = SceneMaps::build(&scene, &MapOptions { robot_radius: 0.25, ..Default::default() }).unwrap();
+    /// // A turtlebot at (1, 1.5) in an empty 4 × 3 m room.
+    /// let nav = Navigator::new(NavigateSettings::default())?;
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+    /// let plan = nav.plan(&world, robot, &maps, [3.0, 1.5, 0.0], &mut rng)?;
+    /// assert!(plan.length >= 2.0 - 1e-6 && plan.length < 2.5);
+    /// assert!(nav.plan(&world, robot, &maps, [f64::NAN, 0.0, 0.0], &mut rng).is_err());
+    /// # Ok::<(), hearth_skills::SkillError>(())
+    /// ```
     pub fn plan<R: Rng + ?Sized>(
         &self,
         world: &World,
@@ -356,6 +387,29 @@ impl Navigator {
     /// # Errors
     /// See the [module docs](self). Errors before the base moves leave the world unchanged;
     /// later ones leave the base where it stopped.
+    ///
+    /// ```
+    /// # use hearth_sim::assets::RoomType;
+    /// # use hearth_sim::scene::{MapOptions, RobotPlacement, Room, SceneFile, SceneMaps};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// use hearth_skills::Execution;
+    /// use hearth_skills::navigate::{NavigateSettings, Navigator};
+    /// use rand::SeedableRng;
+    /// # let mut scene = SceneFile::empty("one room");
+    /// # let polygon = vec![[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]];
+    /// # scene.building.rooms.push(Room { name: "office".into(), room_type: RoomType::Office, polygon });
+    /// # scene.robot = Some(RobotPlacement { name: "turtlebot".into(), position: [1.0, 1.5, 0.0], yaw: 0.0 });
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let robot = world.load_scene(&scene).unwrap().robot.unwrap();
+    /// # let maps = SceneMaps::build(&scene, &MapOptions { robot_radius: 0.25, ..Default::default() }).unwrap();
+    /// // A turtlebot at (1, 1.5) in an empty 4 × 3 m room, moved kinematically (teleported).
+    /// let nav = Navigator::new(NavigateSettings { execution: Execution::Kinematic, ..Default::default() })?;
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+    /// let report = nav.navigate(&mut world, robot, &maps, [3.0, 1.5, 1.57], &mut rng)?;
+    /// assert!(report.position_error <= nav.settings().position_tolerance);
+    /// assert!((report.final_pose[0] - 3.0).abs() < 0.1);
+    /// # Ok::<(), hearth_skills::SkillError>(())
+    /// ```
     pub fn navigate<R: Rng + ?Sized>(
         &self,
         world: &mut World,

@@ -99,8 +99,8 @@ impl Subgoal {
     }
 }
 
-/// The action space of a ReLMoGen env and how its actions decode (see the [module
-/// docs](self) for the layouts).
+/// The action space of a ReLMoGen env and how its actions decode (`docs/relmogen.md` has the
+/// layouts).
 ///
 /// ```
 /// use hearth_skills::relmogen::{ActionForm, ActionSpec, PushDirection, Subgoal};

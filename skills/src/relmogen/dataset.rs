@@ -194,7 +194,8 @@ pub struct DatasetSummary {
     pub pushes_per_second: f64,
 }
 
-/// A world with a Fetch, ready to sample locations and push (see the [module docs](self)).
+/// A world with a Fetch, ready to sample locations and push (`docs/relmogen.md` has the
+/// dataset format).
 ///
 /// ```no_run
 /// use hearth_sim::scene::{GenerateOptions, generate};
@@ -561,7 +562,7 @@ impl PushDataset {
         Ok(record)
     }
 
-    /// Writes every location not yet complete in `dir` (see the [module docs](self)),
+    /// Writes every location not yet complete in `dir` (format in `docs/relmogen.md`),
     /// calling `progress` after each location.
     ///
     /// # Errors

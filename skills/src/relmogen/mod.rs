@@ -1,7 +1,7 @@
 //! ReLMoGen (Xia et al., 2021): reinforcement learning over motion-generator subgoals. A
 //! policy picks, at each step, the base or the arm and a subgoal — a base pose to navigate to,
 //! or a pixel of the head camera to push — and the skills plan and execute it
-//! ([`crate::navigate`], [`crate::push`]). [`ReLMoGenEnv`] wraps a
+//! ([`crate::navigate()`], [`crate::push`]). [`ReLMoGenEnv`] wraps a
 //! [`hearth_sim::env::Env`] (`push_drawer`, `push_cabinet`, `interactive_nav` with the Fetch)
 //! this way; [`ReLMoGenVecEnv`] steps many on rayon's threads; [`PushDataset`] records where
 //! pushes succeed, for supervised score maps. `docs/relmogen.md` has the action layouts, info
