@@ -11,7 +11,7 @@
 //!   export and scene statistics.
 //! - [`sensors`]: cameras (wgpu rasteriser and CPU ray caster, eight modalities), LiDAR and
 //!   occupancy grids.
-//! - [`env`]: Gymnasium-shaped environments and tasks built from a TOML file, vectorised.
+//! - [`env`](mod@env): Gymnasium-shaped environments and tasks built from a TOML file, vectorised.
 //! - [`randomize`]: seeded domain randomisation of object models, visual and physical
 //!   materials, poses and sensor noise.
 //!

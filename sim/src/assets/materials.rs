@@ -239,6 +239,12 @@ impl std::fmt::Display for Material {
 #[error(
     "unknown material `{0}` (known: wood, metal, marble, fabric, plastic, glass, ceramic, leather, stone, paper, rubber, foam, foliage, plaster)"
 )]
+/// ```
+/// use hearth_sim::assets::{Material, UnknownMaterial};
+/// let err = "jade".parse::<Material>().unwrap_err();
+/// assert_eq!(err, UnknownMaterial("jade".into()));
+/// assert!(err.to_string().contains("marble"));
+/// ```
 pub struct UnknownMaterial(pub String);
 
 impl std::str::FromStr for Material {

@@ -10,6 +10,13 @@ use crate::assets::Category;
 use crate::randomize::{RandomizationConfig, RandomizeError};
 
 /// Where the home comes from.
+///
+/// ```
+/// use hearth_sim::env::EnvConfig;
+/// let c = EnvConfig::from_toml("[scene]\ngenerate = 4\nrooms = 5\n[task]\nname = \"object_nav\"\n").unwrap();
+/// assert_eq!((c.scene.generate, c.scene.rooms), (4, 5));
+/// assert!(c.scene.file.is_none() && c.scene.small_objects);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneConfig {
@@ -49,6 +56,13 @@ impl Default for SceneConfig {
 }
 
 /// The robot and its base controller.
+///
+/// ```
+/// use hearth_sim::env::RobotConfig;
+/// let r = RobotConfig::default();
+/// assert_eq!(r.name, "turtlebot");
+/// assert_eq!((r.max_linear_speed, r.max_angular_speed), (0.5, 1.5));
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotConfig {
@@ -84,6 +98,13 @@ impl Default for RobotConfig {
 }
 
 /// The task and its reward (see `docs/env.md` for which keys each task reads).
+///
+/// ```
+/// use hearth_sim::env::EnvConfig;
+/// let c = EnvConfig::from_toml("[task]\nname = \"point_nav_fixed\"\nstart = [0, 0, 0]\ngoal = [2, 1]\n").unwrap();
+/// assert_eq!(c.task.goal, Some([2.0, 1.0]));
+/// assert_eq!(c.task.goal_tolerance, 0.36);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskConfig {
@@ -260,6 +281,13 @@ impl TaskConfig {
 const ARM_TASKS: [&str; 4] = ["reaching", "push_drawer", "push_cabinet", "room_rearrangement"];
 
 /// Camera settings for the `rgb`, `depth`, … observations.
+///
+/// ```
+/// use hearth_sim::env::CameraSection;
+/// let cam = CameraSection::default();
+/// assert_eq!((cam.width, cam.height, cam.backend.as_str()), (128, 128, "auto"));
+/// assert!(cam.near < cam.far);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
@@ -315,6 +343,13 @@ impl Default for CameraSection {
 }
 
 /// LiDAR settings for `scan`, `scan_16` and `occupancy_grid`.
+///
+/// ```
+/// use hearth_sim::env::LidarSection;
+/// let lidar = LidarSection::default();
+/// assert_eq!(lidar.model, "hokuyo");
+/// assert_eq!((lidar.dropout, lidar.noise_std), (0.0, 0.0));
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LidarSection {
@@ -365,6 +400,14 @@ impl Default for LidarSection {
 }
 
 /// Which observations and their sensors.
+///
+/// ```
+/// use hearth_sim::env::EnvConfig;
+/// let toml = "[task]\nname = \"object_nav\"\n[sensors]\nmodalities = [\"depth\"]\n[sensors.camera]\nwidth = 64\n";
+/// let c = EnvConfig::from_toml(toml).unwrap();
+/// assert_eq!(c.sensors.modalities, ["depth"]);
+/// assert_eq!((c.sensors.camera.width, c.sensors.camera.height), (64, 128));
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorsConfig {
@@ -396,6 +439,12 @@ impl Default for SensorsConfig {
 }
 
 /// Physics and control rates.
+///
+/// ```
+/// use hearth_sim::env::PhysicsConfig;
+/// let p = PhysicsConfig::default();
+/// assert!((p.timestep * f64::from(p.substeps) - 1.0 / 30.0).abs() < 1e-12);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PhysicsConfig {
@@ -428,6 +477,12 @@ impl Default for PhysicsConfig {
 }
 
 /// Episode limits.
+///
+/// ```
+/// use hearth_sim::env::EnvConfig;
+/// let c = EnvConfig::from_toml("[task]\nname = \"object_nav\"\n[episode]\nmax_steps = 50\n").unwrap();
+/// assert_eq!(c.episode.max_steps, 50);
+/// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EpisodeConfig {
@@ -484,6 +539,12 @@ pub struct EnvConfig {
 }
 
 /// Observation names an env can produce.
+///
+/// ```
+/// use hearth_sim::env::OBSERVATION_NAMES;
+/// assert!(OBSERVATION_NAMES.contains(&"scan"));
+/// assert!(!OBSERVATION_NAMES.contains(&"sonar"));
+/// ```
 pub const OBSERVATION_NAMES: [&str; 14] = [
     "rgb",
     "depth",
@@ -502,6 +563,12 @@ pub const OBSERVATION_NAMES: [&str; 14] = [
 ];
 
 /// Task names.
+///
+/// ```
+/// use hearth_sim::env::{TaskConfig, TASK_NAMES};
+/// assert!(TASK_NAMES.contains(&"object_nav"));
+/// assert_eq!(TASK_NAMES.iter().filter(|t| TaskConfig::named(t).uses_arm()).count(), 4);
+/// ```
 pub const TASK_NAMES: [&str; 8] = [
     "point_nav_fixed",
     "point_nav_random",
@@ -534,6 +601,14 @@ impl EnvConfig {
     /// # Errors
     /// [`EnvError::Parse`] naming the unknown key or bad value and its line;
     /// [`EnvError::Config`] for values out of range.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, EnvError};
+    /// let c = EnvConfig::from_toml("[robot]\nname = \"fetch\"\n[task]\nname = \"reaching\"\n").unwrap();
+    /// assert!(c.task.uses_arm());
+    /// let err = EnvConfig::from_toml("[robot]\nname = \"turtlebot\"\n[task]\nname = \"reaching\"\n").unwrap_err();
+    /// assert!(matches!(err, EnvError::Config { ref key, .. } if key == "robot.name"), "{err}");
+    /// ```
     pub fn from_toml(text: &str) -> EnvResult<Self> {
         let config: EnvConfig = toml::from_str(text).map_err(|e| EnvError::Parse(e.to_string()))?;
         config.validate()?;
@@ -544,6 +619,15 @@ impl EnvConfig {
     ///
     /// # Errors
     /// [`EnvError::Io`] when the file cannot be read, then as [`EnvConfig::from_toml`].
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, EnvError};
+    /// let path = std::env::temp_dir().join("hearth_sim_doc_env.toml");
+    /// std::fs::write(&path, "[task]\nname = \"object_nav\"\n").unwrap();
+    /// assert_eq!(EnvConfig::load(&path).unwrap().task.name, "object_nav");
+    /// assert!(matches!(EnvConfig::load(&path.with_extension("missing")), Err(EnvError::Io { .. })));
+    /// # std::fs::remove_file(&path).ok();
+    /// ```
     pub fn load(path: &std::path::Path) -> EnvResult<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| EnvError::Io {
             path: path.display().to_string(),
@@ -556,6 +640,14 @@ impl EnvConfig {
     ///
     /// # Errors
     /// [`EnvError::Config`] naming the key.
+    ///
+    /// ```
+    /// # use hearth_sim::env::EnvConfig;
+    /// let mut c = EnvConfig::from_toml("[task]\nname = \"object_nav\"\n").unwrap();
+    /// assert!(c.validate().is_ok());
+    /// c.sensors.lidar.dropout = 1.5;
+    /// assert!(c.validate().unwrap_err().to_string().contains("sensors.lidar.dropout"));
+    /// ```
     pub fn validate(&self) -> EnvResult<()> {
         self.randomization.validate().map_err(|e| match e {
             RandomizeError::InvalidValue { key, value, reason } => EnvError::Config {

@@ -40,6 +40,28 @@ pub struct Info {
 }
 
 /// The result of [`Env::step`].
+///
+/// ```
+/// # use hearth_sim::env::{Env, EnvConfig};
+/// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+/// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+/// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+/// # let path = std::env::temp_dir().join("hearth_sim_doc_step_struct.json");
+/// # let written_file = path.clone();
+/// # std::fs::write(&path, hall).unwrap();
+/// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+/// let mut config = EnvConfig::from_toml(toml)?;
+/// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+/// let mut env = Env::new(config)?;
+/// env.reset(0)?;
+/// let step = env.step(&[1.0, 0.0])?;
+/// assert!(step.reward.is_finite() && step.info.metrics.path_length > 0.0);
+/// assert!(!step.terminated && !step.truncated);
+/// assert_eq!(step.info.metrics.episode_length, 1);
+/// # std::fs::remove_file(&written_file).ok();
+/// # Ok::<(), hearth_sim::env::EnvError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Step {
     /// Observations after the step.
@@ -159,6 +181,26 @@ impl Env {
     ///
     /// # Errors
     /// Configuration, scene, world or sensor errors, each naming the problem.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_new.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config.clone())?;
+    /// assert_eq!(env.config().robot.name, "turtlebot");
+    /// config.scene.file = Some("no/such/scene.json".into());
+    /// assert!(Env::new(config).is_err());
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn new(config: EnvConfig) -> EnvResult<Self> {
         config.validate()?;
         let home = home_of(&config)?;
@@ -345,39 +387,171 @@ impl Env {
     }
 
     /// The observation spaces, in the order observations come.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_spaces.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// let spaces = env.observation_spaces();
+    /// assert_eq!(spaces.len(), 1);
+    /// assert_eq!(spaces[0].name, "task_obs");
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn observation_spaces(&self) -> &[Space] {
         &self.spaces
     }
 
     /// The action space: (linear, angular) in [−1, 1], then for the manipulation tasks the
     /// velocities of the torso and the 7 arm joints in [−1, 1] (fractions of their limits).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_action.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// assert_eq!(env.action_space().shape, [2]); // (linear, angular)
+    /// assert_eq!((env.action_space().low, env.action_space().high), (-1.0, 1.0));
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn action_space(&self) -> &Space {
         &self.action_space
     }
 
     /// The configuration.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_config.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// assert_eq!(env.config().task.name, "point_nav_fixed");
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn config(&self) -> &EnvConfig {
         &self.config
     }
 
     /// The physics world (read-only).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_world.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// assert_eq!(env.world().models().count(), 1); // the robot
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn world(&self) -> &World {
         &self.world
     }
 
     /// The robot's model handle.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_robot.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// assert_eq!(env.world().model(env.robot())?.name(), "turtlebot");
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn robot(&self) -> ModelHandle {
         self.robot
     }
 
     /// The home's traversability map (cells the robot's footprint fits), for scripted policies
     /// and planners (`SceneMaps::shortest_path`).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_maps.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let env = Env::new(config)?;
+    /// assert!(env.maps().is_traversable([3.0, 1.0]));
+    /// assert!(!env.maps().is_traversable([3.0, 5.0]));
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn maps(&self) -> &SceneMaps {
         &self.maps
     }
 
     /// Start (x, y, yaw) and goal (x, y) of the current episode (for tasks without a point
     /// goal, the (x, y) of [`Env::goal`]).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_start_goal.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let mut env = Env::new(config)?;
+    /// env.reset(0)?;
+    /// let (start, goal) = env.start_and_goal();
+    /// assert_eq!((start, goal), ([1.0, 1.0, 0.0], [4.0, 1.0]));
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn start_and_goal(&self) -> ([f64; 3], [f64; 2]) {
         let g = self.task.goal();
         (self.task.start(), [g[0], g[1]])
@@ -534,6 +708,27 @@ impl Env {
     ///
     /// # Errors
     /// [`EnvError::Task`] when no start and goal fit the task; sensor errors.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_reset.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let mut env = Env::new(config)?;
+    /// let (obs, info) = env.reset(7)?;
+    /// assert_eq!(info.episode_seed, 7);
+    /// let task = obs.get("task_obs").and_then(|d| d.as_f32()).unwrap();
+    /// assert!((task[0] - 3.0).abs() < 0.05, "the goal is 3 m ahead: {task:?}");
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn reset(&mut self, seed: u64) -> EnvResult<(Obs, Info)> {
         let episode = self.randomize()?;
         self.world.restore(&self.home)?;
@@ -590,6 +785,29 @@ impl Env {
     /// # Errors
     /// [`EnvError::NotReset`] before the first reset; [`EnvError::BadAction`] for a wrong
     /// length or a non-finite entry (the world is not touched).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Env, EnvConfig};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_env_step.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let mut env = Env::new(config)?;
+    /// assert!(env.step(&[0.0, 0.0]).is_err(), "reset first");
+    /// env.reset(0)?;
+    /// assert!(env.step(&[0.5]).is_err(), "two values");
+    /// let before = env.world().time();
+    /// env.step(&[0.5, 0.0])?;
+    /// assert!(env.world().time() > before);
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn step(&mut self, action: &[f32]) -> EnvResult<Step> {
         if !self.started {
             return Err(EnvError::NotReset);

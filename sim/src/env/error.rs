@@ -61,4 +61,13 @@ pub enum EnvError {
 }
 
 /// Shorthand.
+///
+/// ```
+/// use hearth_sim::env::{EnvConfig, EnvResult};
+/// fn robot_of(toml: &str) -> EnvResult<String> {
+///     Ok(EnvConfig::from_toml(toml)?.robot.name)
+/// }
+/// assert_eq!(robot_of("[task]\nname = \"object_nav\"\n").unwrap(), "turtlebot");
+/// assert!(robot_of("[task]\nname = \"fly\"\n").is_err());
+/// ```
 pub type EnvResult<T> = Result<T, EnvError>;

@@ -3,6 +3,12 @@
 use serde::Serialize;
 
 /// Element type of an array.
+///
+/// ```
+/// use hearth_sim::env::{DType, Space};
+/// let rgb = Space::boxed("rgb", &[64, 64, 3], DType::U8, 0.0, 255.0);
+/// assert_eq!(rgb.dtype, DType::U8);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DType {
@@ -37,6 +43,12 @@ pub struct Space {
 
 impl Space {
     /// A box space.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{DType, Space};
+    /// let s = Space::boxed("scan", &[228, 1], DType::F32, 0.0, 1.0);
+    /// assert_eq!((s.name.as_str(), s.shape.as_slice(), s.high), ("scan", &[228, 1][..], 1.0));
+    /// ```
     pub fn boxed(name: &str, shape: &[usize], dtype: DType, low: f64, high: f64) -> Self {
         Self {
             name: name.to_owned(),
@@ -48,12 +60,25 @@ impl Space {
     }
 
     /// Number of elements.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{DType, Space};
+    /// assert_eq!(Space::boxed("rgb", &[4, 3, 3], DType::U8, 0.0, 255.0).size(), 36);
+    /// assert_eq!(Space::boxed("none", &[], DType::F32, 0.0, 1.0).size(), 1); // a scalar
+    /// ```
     pub fn size(&self) -> usize {
         self.shape.iter().product()
     }
 }
 
 /// Values of one observation.
+///
+/// ```
+/// use hearth_sim::env::ObsData;
+/// let ids = ObsData::U32(vec![3, 3, 7]);
+/// assert_eq!(ids.len(), 3);
+/// assert!(ids.as_f32().is_none());
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub enum ObsData {
     /// Floats.
@@ -66,6 +91,11 @@ pub enum ObsData {
 
 impl ObsData {
     /// Number of elements.
+    ///
+    /// ```
+    /// # use hearth_sim::env::ObsData;
+    /// assert_eq!(ObsData::U8(vec![0; 12]).len(), 12);
+    /// ```
     pub fn len(&self) -> usize {
         match self {
             ObsData::F32(v) => v.len(),
@@ -75,11 +105,23 @@ impl ObsData {
     }
 
     /// Whether empty.
+    ///
+    /// ```
+    /// # use hearth_sim::env::ObsData;
+    /// assert!(ObsData::F32(Vec::new()).is_empty());
+    /// assert!(!ObsData::U8(vec![1]).is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
     /// The floats, if this is an f32 array.
+    ///
+    /// ```
+    /// # use hearth_sim::env::ObsData;
+    /// assert_eq!(ObsData::F32(vec![0.5]).as_f32(), Some(&[0.5f32][..]));
+    /// assert_eq!(ObsData::U8(vec![1]).as_f32(), None);
+    /// ```
     pub fn as_f32(&self) -> Option<&[f32]> {
         match self {
             ObsData::F32(v) => Some(v),
@@ -122,6 +164,13 @@ pub struct Obs {
 
 impl Obs {
     /// The observation called `name`.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{Obs, ObsData};
+    /// let obs = Obs { entries: vec![("bump".into(), ObsData::U8(vec![0]))] };
+    /// assert_eq!(obs.get("bump"), Some(&ObsData::U8(vec![0])));
+    /// assert_eq!(obs.get("scan"), None);
+    /// ```
     pub fn get(&self, name: &str) -> Option<&ObsData> {
         self.entries.iter().find(|(n, _)| n == name).map(|(_, d)| d)
     }

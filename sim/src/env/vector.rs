@@ -9,6 +9,14 @@ use super::error::{EnvError, EnvResult};
 use super::spaces::{Obs, ObsData};
 
 /// Observations of all envs, batched per name (env-major: env 0's values first).
+///
+/// ```
+/// use hearth_sim::env::{BatchedObs, Obs, ObsData};
+/// let obs = Obs { entries: vec![("bump".into(), ObsData::U8(vec![1]))] };
+/// let batch = BatchedObs::stack(&[obs.clone(), obs]);
+/// assert_eq!(batch.entries.len(), 1);
+/// assert_eq!(batch.get("bump").unwrap().len(), 2);
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BatchedObs {
     /// (name, values of every env concatenated) pairs.
@@ -45,12 +53,41 @@ impl BatchedObs {
     }
 
     /// The batch of observation `name`.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{BatchedObs, ObsData};
+    /// let batch = BatchedObs { entries: vec![("task_obs".into(), ObsData::F32(vec![0.0; 8]))] };
+    /// assert_eq!(batch.get("task_obs").map(ObsData::len), Some(8));
+    /// assert!(batch.get("rgb").is_none());
+    /// ```
     pub fn get(&self, name: &str) -> Option<&ObsData> {
         self.entries.iter().find(|(n, _)| n == name).map(|(_, d)| d)
     }
 }
 
 /// The result of [`VecEnv::step`].
+///
+/// ```
+/// # use hearth_sim::env::{EnvConfig, VecEnv};
+/// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+/// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+/// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+/// # let path = std::env::temp_dir().join("hearth_sim_doc_vecstep.json");
+/// # let written_file = path.clone();
+/// # std::fs::write(&path, hall).unwrap();
+/// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+/// let mut config = EnvConfig::from_toml(toml)?;
+/// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+/// let mut envs = VecEnv::new(&config, 2)?;
+/// envs.reset(0)?;
+/// let step = envs.step(&[1.0, 0.0, 0.0, 0.0])?;
+/// assert_eq!(step.rewards.len(), 2);
+/// assert!(step.infos[0].metrics.path_length > step.infos[1].metrics.path_length, "only env 0 drove");
+/// assert_eq!(step.infos.len(), 2);
+/// # std::fs::remove_file(&written_file).ok();
+/// # Ok::<(), hearth_sim::env::EnvError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct VecStep {
     /// Observations (after auto-reset for envs whose episode ended).
@@ -89,6 +126,25 @@ impl VecEnv {
     ///
     /// # Errors
     /// As [`Env::new`]; [`EnvError::Config`] for `n == 0`.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_new.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let envs = VecEnv::new(&config, 2)?;
+    /// assert_eq!(envs.len(), 2);
+    /// assert!(VecEnv::new(&config, 0).is_err());
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn new(config: &EnvConfig, n: usize) -> EnvResult<Self> {
         if n == 0 {
             return Err(EnvError::Config {
@@ -113,16 +169,68 @@ impl VecEnv {
     }
 
     /// Number of envs.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_len.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// assert_eq!(VecEnv::new(&config, 1)?.len(), 1);
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn len(&self) -> usize {
         self.envs.len()
     }
 
     /// Whether there are no envs (never: `new` refuses 0).
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_empty.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// assert!(!VecEnv::new(&config, 1)?.is_empty());
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.envs.is_empty()
     }
 
     /// The envs.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_envs.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let envs = VecEnv::new(&config, 2)?;
+    /// assert!(envs.envs().iter().all(|e| e.config().task.name == "point_nav_fixed"));
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn envs(&self) -> &[Env] {
         &self.envs
     }
@@ -140,6 +248,25 @@ impl VecEnv {
     ///
     /// # Errors
     /// The first env error.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_reset.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// let mut envs = VecEnv::new(&config, 2)?;
+    /// let obs = envs.reset(3)?;
+    /// assert_eq!(obs.get("task_obs").unwrap().len(), 2 * envs.envs()[0].observation_spaces()[0].size());
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn reset(&mut self, seed: u64) -> EnvResult<BatchedObs> {
         self.base_seed = seed;
         self.episodes.iter_mut().for_each(|e| *e = 0);
@@ -159,6 +286,29 @@ impl VecEnv {
     /// # Errors
     /// [`EnvError::BadAction`] for a wrong total length (nothing is stepped), or the first env
     /// error.
+    ///
+    /// ```
+    /// # use hearth_sim::env::{EnvConfig, VecEnv};
+    /// # let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+    /// #     "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+    /// #   "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    /// # let path = std::env::temp_dir().join("hearth_sim_doc_vec_step.json");
+    /// # let written_file = path.clone();
+    /// # std::fs::write(&path, hall).unwrap();
+    /// let toml = concat!("[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n",
+    ///     "[sensors]\nmodalities = [\"task_obs\"]\n");
+    /// let mut config = EnvConfig::from_toml(toml)?;
+    /// config.scene.file = Some(path); // a bare 6 m × 2 m hall with a turtlebot
+    /// config.episode.max_steps = 1;
+    /// let mut envs = VecEnv::new(&config, 1)?;
+    /// envs.reset(0)?;
+    /// assert!(envs.step(&[0.0]).is_err(), "2 values per env");
+    /// let step = envs.step(&[0.0, 0.0])?;
+    /// assert_eq!(step.truncated, [true]); // and env 0 was reset at once
+    /// assert_eq!(step.infos[0].metrics.episode_length, 1);
+    /// # std::fs::remove_file(&written_file).ok();
+    /// # Ok::<(), hearth_sim::env::EnvError>(())
+    /// ```
     pub fn step(&mut self, actions: &[f32]) -> EnvResult<VecStep> {
         let n = self.envs.len();
         let per = self.envs[0].action_space().size();

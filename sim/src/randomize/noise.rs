@@ -9,6 +9,10 @@ use super::sampling::standard_normal;
 use crate::scene::{SceneFile, SceneMaps};
 
 /// How many perturbed robot start poses are tried before the original is kept.
+///
+/// ```
+/// assert!(hearth_sim::randomize::START_POSE_TRIES >= 1);
+/// ```
 pub const START_POSE_TRIES: usize = 20;
 
 /// Depth-image noise: zero-mean Gaussian with a standard deviation that grows with the square
@@ -36,6 +40,12 @@ pub struct DepthNoise {
 
 impl DepthNoise {
     /// No noise.
+    ///
+    /// ```
+    /// # use hearth_sim::randomize::DepthNoise;
+    /// assert_eq!(DepthNoise::NONE, DepthNoise::default());
+    /// assert_eq!(DepthNoise::NONE.std_at(3.0), 0.0);
+    /// ```
     pub const NONE: DepthNoise = DepthNoise {
         std: 0.0,
         quadratic: 0.0,
@@ -43,11 +53,24 @@ impl DepthNoise {
     };
 
     /// Whether nothing is drawn.
+    ///
+    /// ```
+    /// # use hearth_sim::randomize::DepthNoise;
+    /// assert!(DepthNoise::default().is_none());
+    /// assert!(!DepthNoise { dropout: 0.01, ..DepthNoise::NONE }.is_none());
+    /// ```
     pub fn is_none(&self) -> bool {
         self.std == 0.0 && self.quadratic == 0.0 && self.dropout == 0.0
     }
 
     /// Standard deviation at distance `d`.
+    ///
+    /// ```
+    /// # use hearth_sim::randomize::DepthNoise;
+    /// let n = DepthNoise { std: 0.001, quadratic: 0.002, dropout: 0.0 };
+    /// assert!((n.std_at(0.0) - 0.001).abs() < 1e-15);
+    /// assert!((n.std_at(3.0) - 0.019).abs() < 1e-12);
+    /// ```
     pub fn std_at(&self, d: f64) -> f64 {
         self.std + self.quadratic * d * d
     }

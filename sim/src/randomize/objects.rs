@@ -393,8 +393,9 @@ fn root_of(i: usize, scene: &SceneFile, index: &HashMap<&str, usize>) -> usize {
 }
 
 /// Swaps objects of `scene` for other variants of their categories (see the [module
-/// docs](self)). Draws one seed from `rng`; each object then has its own stream keyed by its
-/// name, so whether an object is swapped, and for what, does not depend on the others.
+/// docs](crate::randomize)). Draws one seed from `rng`; each object then has its own stream
+/// keyed by its name, so whether an object is swapped, and for what, does not depend on the
+/// others.
 ///
 /// # Errors
 /// [`RandomizeError::Scene`] when the input scene does not validate (the scene is unchanged).

@@ -379,6 +379,17 @@ impl SceneMaps {
 
     /// The distance a [`SceneMaps::distance_field`] gives at world point `p` (its cell's),
     /// `None` off the map.
+    ///
+    /// ```
+    /// # use hearth_sim::scene::{MapOptions, SceneFile, SceneMaps};
+    /// let studio = SceneFile::from_json_str(r#"{"name": "studio", "building": {"rooms": [
+    ///     {"name": "living", "room_type": "living_room", "polygon": [[0, 0], [4, 0], [4, 3], [0, 3]]}]}}"#).unwrap();
+    /// let maps = SceneMaps::build(&studio, &MapOptions::default()).unwrap();
+    /// let field = maps.distance_field([1.0, 1.5]).unwrap();
+    /// let d = maps.geodesic_at(&field, [3.0, 1.5]).unwrap();
+    /// assert!((d - 2.0).abs() < 0.1, "{d}");
+    /// assert_eq!(maps.geodesic_at(&field, [1e6, 0.0]), None);
+    /// ```
     pub fn geodesic_at(&self, field: &[f64], p: [f64; 2]) -> Option<f64> {
         let (x, y) = self.cell_of(p)?;
         field.get(y * self.width + x).copied()

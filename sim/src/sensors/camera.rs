@@ -27,6 +27,12 @@ use super::error::{SensorError, SensorResult, check_param};
 use crate::world::{ModelHandle, World};
 
 /// Largest image side accepted.
+///
+/// ```
+/// use hearth_sim::sensors::{CameraIntrinsics, camera::MAX_IMAGE_SIDE};
+/// assert!(CameraIntrinsics::new(MAX_IMAGE_SIDE, 16, 60.0).is_ok());
+/// assert!(CameraIntrinsics::new(MAX_IMAGE_SIDE + 1, 16, 60.0).is_err());
+/// ```
 pub const MAX_IMAGE_SIDE: u32 = 8192;
 
 /// Pinhole intrinsics from width, height and vertical field of view, with clipping planes.
@@ -57,6 +63,13 @@ impl CameraIntrinsics {
     ///
     /// # Errors
     /// [`SensorError::InvalidResolution`] or [`SensorError::InvalidParameter`].
+    ///
+    /// ```
+    /// use hearth_sim::sensors::CameraIntrinsics;
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// assert_eq!((k.near, k.far), (0.05, 100.0));
+    /// assert!(CameraIntrinsics::new(32, 24, 180.0).is_err());
+    /// ```
     pub fn new(width: u32, height: u32, vfov_deg: f64) -> SensorResult<Self> {
         let k = Self {
             width,
@@ -73,6 +86,13 @@ impl CameraIntrinsics {
     ///
     /// # Errors
     /// As [`CameraIntrinsics::new`].
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraIntrinsics, SensorError};
+    /// let mut k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// k.far = 0.01; // below `near`
+    /// assert!(matches!(k.validate(), Err(SensorError::InvalidParameter { name: "far", .. })));
+    /// ```
     pub fn validate(&self) -> SensorResult<()> {
         if self.width == 0 || self.height == 0 || self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
             return Err(SensorError::InvalidResolution {
@@ -94,21 +114,41 @@ impl CameraIntrinsics {
     }
 
     /// Focal length in pixels along y (square pixels: also along x).
+    ///
+    /// ```
+    /// let k = hearth_sim::sensors::CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// assert!((k.fy() - 12.0).abs() < 1e-9); // half the height at 90°
+    /// ```
     pub fn fy(&self) -> f64 {
         self.height as f64 / 2.0 / (self.vfov_deg.to_radians() / 2.0).tan()
     }
 
     /// Focal length in pixels along x.
+    ///
+    /// ```
+    /// let k = hearth_sim::sensors::CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// assert_eq!(k.fx(), k.fy());
+    /// ```
     pub fn fx(&self) -> f64 {
         self.fy()
     }
 
     /// Principal point (cx, cy) in pixels: the image centre.
+    ///
+    /// ```
+    /// let k = hearth_sim::sensors::CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// assert_eq!(k.principal_point(), (16.0, 12.0));
+    /// ```
     pub fn principal_point(&self) -> (f64, f64) {
         (self.width as f64 / 2.0, self.height as f64 / 2.0)
     }
 
     /// Number of pixels.
+    ///
+    /// ```
+    /// let k = hearth_sim::sensors::CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// assert_eq!(k.pixels(), 768);
+    /// ```
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
     }
@@ -174,6 +214,12 @@ const MODALITY_NAMES: &str = "rgb, depth, normal, seg, ins_seg, optical_flow, sc
 
 impl Modality {
     /// Every modality.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// assert_eq!(Modality::ALL.len(), 8);
+    /// assert_eq!(Modality::ALL.into_iter().collect::<ModalitySet>(), ModalitySet::ALL);
+    /// ```
     pub const ALL: [Modality; 8] = [
         Modality::Rgb,
         Modality::Depth,
@@ -186,6 +232,12 @@ impl Modality {
     ];
 
     /// The name used in configs and on the command line.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Modality;
+    /// assert_eq!(Modality::SceneFlow.name(), "scene_flow");
+    /// assert_eq!(Modality::SceneFlow.name().parse::<Modality>().unwrap(), Modality::SceneFlow);
+    /// ```
     pub fn name(self) -> &'static str {
         match self {
             Modality::Rgb => "rgb",
@@ -256,26 +308,61 @@ pub struct ModalitySet(u8);
 
 impl ModalitySet {
     /// No modality.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::ModalitySet;
+    /// assert!(ModalitySet::EMPTY.is_empty());
+    /// assert_eq!(ModalitySet::EMPTY.iter().count(), 0);
+    /// ```
     pub const EMPTY: ModalitySet = ModalitySet(0);
     /// Every modality.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// assert_eq!(ModalitySet::ALL.iter().collect::<Vec<_>>(), Modality::ALL.to_vec());
+    /// ```
     pub const ALL: ModalitySet = ModalitySet(0xff);
 
     /// This set plus `m`.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// let s = ModalitySet::EMPTY.with(Modality::Seg).with(Modality::Seg);
+    /// assert_eq!(s.iter().count(), 1);
+    /// ```
     pub const fn with(self, m: Modality) -> Self {
         Self(self.0 | m.bit())
     }
 
     /// Whether `m` is in the set.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// let s = ModalitySet::EMPTY.with(Modality::Normal);
+    /// assert!(s.contains(Modality::Normal) && !s.contains(Modality::Depth));
+    /// ```
     pub const fn contains(self, m: Modality) -> bool {
         self.0 & m.bit() != 0
     }
 
     /// Whether the set is empty.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// assert!(ModalitySet::default().is_empty());
+    /// assert!(!ModalitySet::EMPTY.with(Modality::Rgb).is_empty());
+    /// ```
     pub fn is_empty(self) -> bool {
         self.0 == 0
     }
 
     /// The modalities, in [`Modality::ALL`] order.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Modality, ModalitySet};
+    /// let s = ModalitySet::EMPTY.with(Modality::Pc).with(Modality::Rgb);
+    /// assert_eq!(s.iter().collect::<Vec<_>>(), vec![Modality::Rgb, Modality::Pc]);
+    /// ```
     pub fn iter(self) -> impl Iterator<Item = Modality> {
         Modality::ALL.into_iter().filter(move |m| self.contains(*m))
     }
@@ -330,6 +417,12 @@ pub enum Preset {
 
 impl Preset {
     /// Image side in pixels.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Preset;
+    /// assert_eq!(Preset::VisualRl.resolution(), 128);
+    /// assert_eq!(Preset::HighFidelity.resolution(), 512);
+    /// ```
     pub fn resolution(self) -> u32 {
         match self {
             Preset::VisualRl => 128,
@@ -338,6 +431,12 @@ impl Preset {
     }
 
     /// The preset's name (`visual-rl`, `high-fidelity`).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Preset;
+    /// assert_eq!(Preset::HighFidelity.name(), "high-fidelity");
+    /// assert_eq!("high-fidelity".parse::<Preset>().unwrap(), Preset::HighFidelity);
+    /// ```
     pub fn name(self) -> &'static str {
         match self {
             Preset::VisualRl => "visual-rl",
@@ -349,6 +448,13 @@ impl Preset {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] for a bad field of view.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Preset;
+    /// let k = Preset::VisualRl.intrinsics(90.0).unwrap();
+    /// assert_eq!((k.width, k.height), (128, 128));
+    /// assert!(Preset::VisualRl.intrinsics(0.0).is_err());
+    /// ```
     pub fn intrinsics(self, vfov_deg: f64) -> SensorResult<CameraIntrinsics> {
         CameraIntrinsics::new(self.resolution(), self.resolution(), vfov_deg)
     }
@@ -407,6 +513,12 @@ pub enum Backend {
 
 impl Backend {
     /// The backend's name.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Backend;
+    /// assert_eq!(Backend::default().name(), "auto");
+    /// assert_eq!(Backend::Raster.name().parse::<Backend>().unwrap(), Backend::Raster);
+    /// ```
     pub fn name(self) -> &'static str {
         match self {
             Backend::Auto => "auto",
@@ -467,6 +579,13 @@ pub struct Frame {
 
 impl Frame {
     /// Resizes every requested buffer to `w × h` (contents unspecified) and records the set.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Frame, Modality, ModalitySet};
+    /// let mut f = Frame::default();
+    /// f.prepare(4, 3, ModalitySet::EMPTY.with(Modality::Rgb).with(Modality::Depth));
+    /// assert_eq!((f.rgb.len(), f.depth.len(), f.seg.len()), (36, 12, 0));
+    /// ```
     pub fn prepare(&mut self, w: u32, h: u32, modalities: ModalitySet) {
         let n = w as usize * h as usize;
         self.width = w;
@@ -487,6 +606,13 @@ impl Frame {
     }
 
     /// Row-major index of pixel (u, v).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Frame, Modality, ModalitySet};
+    /// let mut f = Frame::default();
+    /// f.prepare(4, 3, ModalitySet::EMPTY.with(Modality::Depth));
+    /// assert_eq!(f.index(1, 2), 9);
+    /// ```
     pub fn index(&self, u: u32, v: u32) -> usize {
         v as usize * self.width as usize + u as usize
     }
@@ -495,6 +621,15 @@ impl Frame {
     ///
     /// # Errors
     /// [`SensorError::NotRendered`] when the frame has no RGB.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Frame, Modality, ModalitySet};
+    /// let mut f = Frame::default();
+    /// assert!(f.rgb_f32().is_err()); // no RGB rendered
+    /// f.prepare(1, 1, ModalitySet::EMPTY.with(Modality::Rgb));
+    /// f.rgb.copy_from_slice(&[0, 255, 51]);
+    /// assert_eq!(f.rgb_f32().unwrap(), vec![0.0, 1.0, 0.2]);
+    /// ```
     pub fn rgb_f32(&self) -> SensorResult<Vec<f32>> {
         if !self.modalities.contains(Modality::Rgb) {
             return Err(SensorError::NotRendered("rgb"));
@@ -561,6 +696,12 @@ pub(crate) fn body_from_optical() -> Rotation3<f64> {
 impl Mount {
     /// The camera link a built-in robot carries (`eyes` on the Fetch, as iGibson; the
     /// LoCoBot's and TurtleBot's camera links).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Mount;
+    /// assert_eq!(Mount::default_camera("turtlebot"), Some(Mount::link("camera_rgb_frame")));
+    /// assert!(Mount::default_camera("drone").is_none());
+    /// ```
     pub fn default_camera(robot: &str) -> Option<Mount> {
         let link = match robot {
             "fetch" => "eyes",
@@ -575,6 +716,12 @@ impl Mount {
     }
 
     /// The laser link of a built-in wheeled robot.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Mount;
+    /// assert_eq!(Mount::default_lidar("locobot"), Some(Mount::link("laser_link")));
+    /// assert!(Mount::default_lidar("panda").is_none());
+    /// ```
     pub fn default_lidar(robot: &str) -> Option<Mount> {
         matches!(robot, "fetch" | "locobot" | "turtlebot").then(|| Mount::Link {
             link: "laser_link".to_owned(),
@@ -583,6 +730,12 @@ impl Mount {
     }
 
     /// A link mount, optical if the link's name contains `optical`.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Mount;
+    /// assert_eq!(Mount::link("head_camera_rgb_optical_frame"), Mount::Link { link: "head_camera_rgb_optical_frame".into(), optical: true });
+    /// assert!(matches!(Mount::link("eyes"), Mount::Link { optical: false, .. }));
+    /// ```
     pub fn link(link: &str) -> Mount {
         Mount::Link {
             link: link.to_owned(),
@@ -629,6 +782,16 @@ impl Mount {
     /// # Errors
     /// [`SensorError::NoSuchLink`] when the robot lacks the link, [`SensorError::World`] for an
     /// unknown robot.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::Mount;
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Point3;
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// let m = Mount::look_at(Point3::new(0.0, 0.0, 1.0), Point3::new(1.0, 0.0, 1.0)).unwrap();
+    /// assert_eq!(m.pose(&world, None).unwrap().translation.z, 1.0);
+    /// assert!(Mount::link("eyes").pose(&world, None).is_err()); // a link mount needs a robot
+    /// ```
     pub fn pose(&self, world: &World, robot: Option<ModelHandle>) -> SensorResult<Isometry3<f64>> {
         match self {
             Mount::Free(p) => Ok(*p),

@@ -38,6 +38,13 @@ impl CameraConfig {
     ///
     /// # Errors
     /// Never for the built-in presets; kept fallible for symmetry with custom intrinsics.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraConfig, Preset};
+    /// let c = CameraConfig::preset(Preset::HighFidelity).unwrap();
+    /// assert_eq!((c.intrinsics.width, c.intrinsics.vfov_deg), (512, 90.0));
+    /// assert!(c.mount.is_none() && c.options.shadows);
+    /// ```
     pub fn preset(preset: Preset) -> SensorResult<Self> {
         Ok(Self {
             intrinsics: preset.intrinsics(90.0)?,
@@ -100,6 +107,20 @@ impl Camera {
     /// Bad intrinsics; [`SensorError::NoDefaultMount`] / [`SensorError::NoSuchLink`] for a
     /// mount the robot lacks; [`SensorError::NoAdapter`] for [`Backend::Wgpu`] without a
     /// graphics adapter; [`SensorError::World`] for an unknown robot.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Mount, Preset, SensorError};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Isometry3;
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// config.backend = Backend::Raycast;
+    /// // No robot and no mount: nowhere to put the camera.
+    /// assert!(matches!(Camera::new(&world, None, config.clone()), Err(SensorError::NoDefaultMount { .. })));
+    /// config.mount = Some(Mount::Free(Isometry3::translation(0.0, 0.0, 1.0)));
+    /// assert!(Camera::new(&world, None, config).is_ok());
+    /// ```
     pub fn new(world: &World, robot: Option<ModelHandle>, config: CameraConfig) -> SensorResult<Self> {
         config.intrinsics.validate()?;
         let mount = match (&config.mount, robot) {
@@ -170,6 +191,20 @@ impl Camera {
     }
 
     /// The backend in use ([`Backend::Wgpu`], [`Backend::Raycast`] or [`Backend::Raster`]).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// assert_eq!(camera.backend(), Backend::Raycast);
+    /// ```
     pub fn backend(&self) -> Backend {
         match self.renderer {
             Renderer::Gpu(_) => Backend::Wgpu,
@@ -178,7 +213,22 @@ impl Camera {
         }
     }
 
-    /// The graphics adapter's name for the wgpu backend; `cpu ray casting` otherwise.
+    /// The graphics adapter's name for the wgpu backend; `cpu ray casting` or `cpu rasteriser`
+    /// for the CPU backends.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// assert_eq!(camera.adapter(), "cpu ray casting");
+    /// ```
     pub fn adapter(&self) -> &str {
         match &self.renderer {
             Renderer::Gpu(g) => g.adapter_name(),
@@ -188,11 +238,41 @@ impl Camera {
     }
 
     /// The configuration.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// assert_eq!(camera.config().intrinsics.width, 32);
+    /// ```
     pub fn config(&self) -> &CameraConfig {
         &self.config
     }
 
     /// The visual scene the camera draws.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let scene = camera.scene();
+    /// assert_eq!(scene.items.len(), 2); // the ground and the crate
+    /// assert_eq!(scene.instances[1].name, "crate");
+    /// ```
     pub fn scene(&self) -> &VisualScene {
         &self.scene
     }
@@ -201,6 +281,21 @@ impl Camera {
     ///
     /// # Errors
     /// As [`Mount::pose`].
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let pose = camera.pose(&world).unwrap();
+    /// assert_eq!(pose.translation.vector.z, 0.5);
+    /// ```
     pub fn pose(&self, world: &World) -> SensorResult<Isometry3<f64>> {
         self.mount.pose(world, self.robot)
     }
@@ -209,6 +304,22 @@ impl Camera {
     ///
     /// # Errors
     /// [`SensorError::Gpu`] when the device fails; mount errors if the robot left the world.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let frame = camera.render(&world, ModalitySet::EMPTY.with(Modality::InsSeg)).unwrap();
+    /// assert_eq!((frame.width, frame.height), (32, 24));
+    /// assert_eq!(frame.ins_seg[frame.index(16, 12)], 2); // the crate, instance 2
+    /// ```
     pub fn render(&mut self, world: &World, modalities: ModalitySet) -> SensorResult<&Frame> {
         let pose = self.mount.pose(world, self.robot)?;
         self.render_from(world, &pose, modalities)
@@ -218,6 +329,24 @@ impl Camera {
     ///
     /// # Errors
     /// As [`Camera::render`], and [`SensorError::InvalidParameter`] for a non-finite pose.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// // Look away from the crate, straight down at the ground from 2 m up.
+    /// let down = Mount::look_at(Point3::new(0.0, 0.0, 2.0), Point3::new(0.0, 0.0, 0.0)).unwrap();
+    /// let Mount::Free(pose) = down else { unreachable!() };
+    /// let frame = camera.render_from(&world, &pose, ModalitySet::EMPTY.with(Modality::Depth)).unwrap();
+    /// assert!((frame.depth[frame.index(16, 12)] - 2.0).abs() < 0.01);
+    /// ```
     pub fn render_from(
         &mut self,
         world: &World,
@@ -234,6 +363,22 @@ impl Camera {
     }
 
     /// The last frame rendered.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// assert!(camera.frame().depth.is_empty()); // nothing rendered yet
+    /// camera.render(&world, ModalitySet::EMPTY.with(Modality::Depth)).unwrap();
+    /// assert_eq!(camera.frame().depth.len(), 32 * 24);
+    /// ```
     pub fn frame(&self) -> &Frame {
         &self.frame
     }
@@ -242,6 +387,23 @@ impl Camera {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] for an item out of range.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// use hearth_sim::{assets::Material, sensors::PbrMaterial};
+    /// camera.set_material(1, PbrMaterial::of(Material::Metal)).unwrap();
+    /// assert_eq!(camera.scene().items[1].material.metallic, 1.0);
+    /// assert!(camera.set_material(99, PbrMaterial::of(Material::Wood)).is_err());
+    /// ```
     pub fn set_material(&mut self, item: usize, material: PbrMaterial) -> SensorResult<()> {
         match &mut self.renderer {
             Renderer::Gpu(g) => g.set_material(item, material)?,
@@ -262,6 +424,24 @@ impl Camera {
     }
 
     /// Forgets the previous frame: the next flows are 0 (call after a reset or teleport).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// let flow = ModalitySet::EMPTY.with(Modality::SceneFlow);
+    /// camera.render(&world, flow).unwrap();
+    /// camera.reset_flow();
+    /// let frame = camera.render(&world, flow).unwrap();
+    /// assert!(frame.scene_flow.iter().all(|f| *f == [0.0; 3]));
+    /// ```
     pub fn reset_flow(&mut self) {
         match &mut self.renderer {
             Renderer::Gpu(g) => g.reset_flow(),
@@ -275,6 +455,23 @@ impl Camera {
     ///
     /// # Errors
     /// As [`Camera::new`].
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Backend, Camera, CameraConfig, CameraIntrinsics, Modality, ModalitySet, Mount, Preset};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), true).unwrap();
+    /// # let mut config = CameraConfig::preset(Preset::VisualRl).unwrap();
+    /// # config.intrinsics = CameraIntrinsics::new(32, 24, 90.0).unwrap();
+    /// # config.backend = Backend::Raycast;
+    /// # config.mount = Some(Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap());
+    /// # let mut camera = Camera::new(&world, None, config).unwrap();
+    /// world.add_box("box", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// assert_eq!(camera.scene().items.len(), 2);
+    /// camera.rebuild(&world).unwrap();
+    /// assert_eq!(camera.scene().items.len(), 3);
+    /// ```
     pub fn rebuild(&mut self, world: &World) -> SensorResult<()> {
         let scene = VisualScene::from_world(world);
         let renderer = Self::make_renderer(&scene, &self.config)?;

@@ -107,6 +107,12 @@ pub enum SensorError {
 }
 
 /// Shorthand for results of sensor calls.
+///
+/// ```
+/// use hearth_sim::sensors::{CameraIntrinsics, SensorError, SensorResult};
+/// let r: SensorResult<CameraIntrinsics> = CameraIntrinsics::new(0, 24, 60.0);
+/// assert!(matches!(r, Err(SensorError::InvalidResolution { width: 0, .. })));
+/// ```
 pub type SensorResult<T> = Result<T, SensorError>;
 
 /// Checks that `value` is finite and in `[lo, hi]`.

@@ -39,9 +39,21 @@ use super::visuals::VisualScene;
 use crate::world::{BodyId, ModelHandle, World};
 
 /// Most rays one scan may have (all beams together).
+///
+/// ```
+/// use hearth_sim::sensors::{LidarSpec, MAX_LIDAR_RAYS};
+/// assert!(LidarSpec::planar(MAX_LIDAR_RAYS, 1.0, 0.1, 5.0).is_ok());
+/// assert!(LidarSpec::planar(MAX_LIDAR_RAYS + 1, 1.0, 0.1, 5.0).is_err());
+/// ```
 pub const MAX_LIDAR_RAYS: usize = 1_000_000;
 
 /// Most beams (elevation angles) a spec may have.
+///
+/// ```
+/// use hearth_sim::sensors::{LidarSpec, MAX_LIDAR_BEAMS};
+/// assert!(LidarSpec::multi_beam(8, 1.0, 0.1, 5.0, vec![0.0; MAX_LIDAR_BEAMS]).is_ok());
+/// assert!(LidarSpec::multi_beam(8, 1.0, 0.1, 5.0, vec![0.0; MAX_LIDAR_BEAMS + 1]).is_err());
+/// ```
 pub const MAX_LIDAR_BEAMS: usize = 1024;
 
 /// Rays per work item: scans are cast in chunks of this many rays (in parallel when the scan
@@ -56,6 +68,26 @@ const PARALLEL_MIN_RAYS: usize = 512;
 const MAX_PASSES: usize = 256;
 
 /// Item index reported for rays that hit nothing (see [`Scan::items`]).
+///
+/// ```
+/// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+/// # use hearth_sim::world::{World, WorldConfig};
+/// # use nalgebra::Isometry3;
+/// # let mut world = World::new(WorldConfig::default()).unwrap();
+/// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+/// # let visuals = VisualScene::from_world(&world);
+/// # let mut rays = RayScene::new(&visuals);
+/// # rays.update(&visuals, &world);
+/// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+/// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+/// # let mut scan = Scan::default();
+/// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+/// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+/// use hearth_sim::sensors::NO_ITEM;
+/// assert!(!scan.hit[0]);
+/// assert_eq!(scan.items[0], NO_ITEM);
+/// assert_ne!(scan.items[2], NO_ITEM); // the wall
+/// ```
 pub const NO_ITEM: u32 = u32::MAX;
 
 /// What a LiDAR measures: its rays and its range.
@@ -90,6 +122,13 @@ impl LidarSpec {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] as [`LidarSpec::validate`].
+    ///
+    /// ```
+    /// use hearth_sim::sensors::LidarSpec;
+    /// let s = LidarSpec::planar(181, std::f64::consts::PI, 0.1, 10.0).unwrap();
+    /// assert_eq!((s.beams(), s.rays()), (1, 181));
+    /// assert!(LidarSpec::planar(181, std::f64::consts::PI, 10.0, 0.1).is_err()); // min ≥ max
+    /// ```
     pub fn planar(rays: usize, fov_rad: f64, min_range: f64, max_range: f64) -> SensorResult<Self> {
         let spec = Self {
             horizontal_rays: rays,
@@ -132,6 +171,12 @@ impl LidarSpec {
 
     /// Hokuyo URG-04LX as iGibson configures it for the Fetch and the TurtleBot: 228 rays over
     /// 240°, 0.02–5.6 m.
+    ///
+    /// ```
+    /// let s = hearth_sim::sensors::LidarSpec::hokuyo_urg_04lx();
+    /// assert_eq!((s.horizontal_rays, s.min_range, s.max_range), (228, 0.02, 5.6));
+    /// assert!(s.validate().is_ok());
+    /// ```
     pub fn hokuyo_urg_04lx() -> Self {
         Self {
             horizontal_rays: 228,
@@ -143,6 +188,12 @@ impl LidarSpec {
     }
 
     /// SICK TiM571: 220 rays over 220°, 0.05–25 m.
+    ///
+    /// ```
+    /// let s = hearth_sim::sensors::LidarSpec::sick_tim571();
+    /// assert_eq!((s.rays(), s.max_range), (220, 25.0));
+    /// assert!((s.horizontal_fov.to_degrees() - 220.0).abs() < 1e-9);
+    /// ```
     pub fn sick_tim571() -> Self {
         Self {
             horizontal_rays: 220,
@@ -181,16 +232,34 @@ impl LidarSpec {
     }
 
     /// Number of beams (elevations).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::LidarSpec;
+    /// assert_eq!(LidarSpec::sick_tim571().beams(), 1);
+    /// assert_eq!(LidarSpec::velodyne_vlp16(1.0).unwrap().beams(), 16);
+    /// ```
     pub fn beams(&self) -> usize {
         self.elevations.len()
     }
 
     /// Rays per scan, all beams together.
+    ///
+    /// ```
+    /// let s = hearth_sim::sensors::LidarSpec::velodyne_vlp16(0.5).unwrap();
+    /// assert_eq!(s.rays(), s.horizontal_rays * 16);
+    /// assert_eq!(s.rays(), 11_520);
+    /// ```
     pub fn rays(&self) -> usize {
         self.horizontal_rays.saturating_mul(self.elevations.len())
     }
 
     /// Whether the azimuths cover a full turn (then `−π` is the first and `+π` is not repeated).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::LidarSpec;
+    /// assert!(LidarSpec::velodyne_vlp16(1.0).unwrap().full_turn());
+    /// assert!(!LidarSpec::hokuyo_urg_04lx().full_turn());
+    /// ```
     pub fn full_turn(&self) -> bool {
         self.horizontal_fov >= std::f64::consts::TAU - 1e-9
     }
@@ -316,12 +385,24 @@ pub struct LidarNoise {
 
 impl LidarNoise {
     /// No noise.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::LidarNoise;
+    /// assert!(LidarNoise::NONE.is_none());
+    /// assert_eq!(LidarNoise::NONE, LidarNoise::default());
+    /// ```
     pub const NONE: LidarNoise = LidarNoise {
         dropout: 0.0,
         gaussian_std: 0.0,
     };
 
     /// Whether any noise is drawn.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::LidarNoise;
+    /// assert!(LidarNoise::NONE.is_none());
+    /// assert!(!LidarNoise { gaussian_std: 0.01, ..LidarNoise::NONE }.is_none());
+    /// ```
     pub fn is_none(&self) -> bool {
         self.dropout == 0.0 && self.gaussian_std == 0.0
     }
@@ -331,6 +412,12 @@ impl LidarNoise {
     /// # Errors
     /// [`SensorError::InvalidParameter`] for a dropout outside `[0, 1]` or a standard deviation
     /// outside `[0, 1e3]` m, or either not finite.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{LidarNoise, SensorError};
+    /// let n = LidarNoise { dropout: 0.0, gaussian_std: -0.1 };
+    /// assert!(matches!(n.validate(), Err(SensorError::InvalidParameter { name: "gaussian_std", .. })));
+    /// ```
     pub fn validate(&self) -> SensorResult<()> {
         check_param("dropout", self.dropout, 0.0, 1.0, "must be a probability in [0, 1]")?;
         check_param("gaussian_std", self.gaussian_std, 0.0, 1e3, "must be in [0, 1000] m")?;
@@ -388,21 +475,93 @@ impl Default for Scan {
 
 impl Scan {
     /// Number of rays.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// assert_eq!(scan.len(), 4);
+    /// assert_eq!(Scan::default().len(), 0);
+    /// ```
     pub fn len(&self) -> usize {
         self.ranges.len()
     }
 
     /// Whether the scan has no rays (nothing scanned yet).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// assert!(!scan.is_empty());
+    /// assert!(Scan::default().is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.ranges.is_empty()
     }
 
     /// Number of rays that returned.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// assert_eq!(scan.hit_count(), 1); // only the ray ahead meets the wall
+    /// ```
     pub fn hit_count(&self) -> usize {
         self.hit.iter().filter(|&&h| h).count()
     }
 
     /// Range of ray `(beam, h)`, if both are in range.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// assert!((scan.range(0, 2).unwrap() - 1.95).abs() < 1e-3);
+    /// assert_eq!(scan.range(0, 0), Some(5.0)); // no return: the maximum range
+    /// assert_eq!(scan.range(1, 0), None); // there is one beam only
+    /// ```
     pub fn range(&self, beam: usize, h: usize) -> Option<f32> {
         if beam >= self.beams || h >= self.horizontal_rays {
             return None;
@@ -411,12 +570,52 @@ impl Scan {
     }
 
     /// Sensor-frame unit direction of ray `i`.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let ahead = scan.direction(2).unwrap();
+    /// assert!((ahead.x - 1.0).abs() < 1e-6 && ahead.y.abs() < 1e-6);
+    /// assert!(scan.direction(4).is_none());
+    /// ```
     pub fn direction(&self, i: usize) -> Option<Vector3<f32>> {
         self.directions.get(i).map(|d| Vector3::new(d[0], d[1], d[2]))
     }
 
     /// Ranges scaled to `[0, 1]` as iGibson's `scan` observation: `(r − min) / (max − min)`,
     /// clamped, so a ray with no return reads 1.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let mut out = vec![9.0; 10];
+    /// scan.normalized_into(&mut out);
+    /// assert_eq!(out.len(), 4);
+    /// assert!((out[2] - (1.95 - 0.1) / 4.9).abs() < 1e-3);
+    /// assert_eq!(out[0], 1.0); // no return
+    /// ```
     pub fn normalized_into(&self, out: &mut Vec<f32>) {
         out.clear();
         let span = (self.max_range - self.min_range).max(f32::MIN_POSITIVE);
@@ -428,6 +627,24 @@ impl Scan {
     }
 
     /// [`Scan::normalized_into`] into a new vector.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let n = scan.normalized();
+    /// assert_eq!(n.iter().filter(|&&x| x == 1.0).count(), 3);
+    /// ```
     pub fn normalized(&self) -> Vec<f32> {
         let mut v = Vec::with_capacity(self.len());
         self.normalized_into(&mut v);
@@ -436,6 +653,26 @@ impl Scan {
 
     /// Sensor-frame points of the rays that returned (in ray order), appended to `out` after
     /// clearing it.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let mut pts = Vec::new();
+    /// scan.points_sensor_into(&mut pts);
+    /// assert_eq!(pts.len(), 1);
+    /// assert!((pts[0].x - 1.95).abs() < 1e-3 && pts[0].z.abs() < 1e-6);
+    /// ```
     pub fn points_sensor_into(&self, out: &mut Vec<Point3<f32>>) {
         out.clear();
         for ((d, &r), &h) in self.directions.iter().zip(&self.ranges).zip(&self.hit) {
@@ -446,6 +683,24 @@ impl Scan {
     }
 
     /// [`Scan::points_sensor_into`] into a new vector.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let p = scan.points_sensor()[0];
+    /// assert!((p.coords.norm() - scan.ranges[2]).abs() < 1e-5);
+    /// ```
     pub fn points_sensor(&self) -> Vec<Point3<f32>> {
         let mut v = Vec::with_capacity(self.len());
         self.points_sensor_into(&mut v);
@@ -454,6 +709,26 @@ impl Scan {
 
     /// World-frame points of the rays that returned (in ray order), through
     /// [`Scan::sensor_pose`], appended to `out` after clearing it.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let mut pts = Vec::new();
+    /// scan.points_world_into(&mut pts);
+    /// assert_eq!(pts.len(), 1);
+    /// assert!((pts[0].x - 1.95).abs() < 1e-3 && (pts[0].z - 0.5).abs() < 1e-6);
+    /// ```
     pub fn points_world_into(&self, out: &mut Vec<Point3<f64>>) {
         out.clear();
         for ((d, &r), &h) in self.directions.iter().zip(&self.ranges).zip(&self.hit) {
@@ -465,6 +740,24 @@ impl Scan {
     }
 
     /// [`Scan::points_world_into`] into a new vector.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// let p = scan.points_world()[0];
+    /// assert!((p - scan.sensor_pose.translation.vector).coords.norm() > 1.9);
+    /// ```
     pub fn points_world(&self) -> Vec<Point3<f64>> {
         let mut v = Vec::with_capacity(self.len());
         self.points_world_into(&mut v);
@@ -529,6 +822,14 @@ impl Lidar {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] for a bad spec or noise.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// assert_eq!(lidar.directions().len(), 220);
+    /// let bad = LidarNoise { dropout: 2.0, gaussian_std: 0.0 };
+    /// assert!(Lidar::new(LidarSpec::sick_tim571(), bad, 3).is_err());
+    /// ```
     pub fn new(spec: LidarSpec, noise: LidarNoise, seed: u64) -> SensorResult<Self> {
         spec.validate()?;
         noise.validate()?;
@@ -551,27 +852,85 @@ impl Lidar {
     }
 
     /// The spec.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// assert_eq!(lidar.spec(), &LidarSpec::sick_tim571());
+    /// ```
     pub fn spec(&self) -> &LidarSpec {
         &self.spec
     }
 
     /// The noise.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let noise = LidarNoise { dropout: 0.05, gaussian_std: 0.01 };
+    /// let lidar = Lidar::new(LidarSpec::sick_tim571(), noise, 3).unwrap();
+    /// assert_eq!(lidar.noise(), noise);
+    /// ```
     pub fn noise(&self) -> LidarNoise {
         self.noise
     }
 
     /// The seed the LiDAR was made (or last reset) with.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// assert_eq!(lidar.seed(), 3);
+    /// lidar.reseed(8);
+    /// assert_eq!(lidar.seed(), 8);
+    /// ```
     pub fn seed(&self) -> u64 {
         self.seed
     }
 
     /// Scans taken since the LiDAR was made or reseeded.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// let mut scan = Scan::default();
+    /// lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// assert_eq!(lidar.scans(), 2);
+    /// lidar.reseed(3);
+    /// assert_eq!(lidar.scans(), 0);
+    /// ```
     pub fn scans(&self) -> u64 {
         self.scans
     }
 
     /// Restarts the noise stream from `seed`: the scans that follow repeat those of a new
     /// LiDAR made with `seed`.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// let noise = LidarNoise { dropout: 0.1, gaussian_std: 0.02 };
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), noise, 5).unwrap();
+    /// let pose = Isometry3::translation(0.0, 0.0, 0.5);
+    /// let (mut a, mut b) = (Scan::default(), Scan::default());
+    /// lidar.scan(&rays, &pose, &mut a);
+    /// lidar.reseed(5);
+    /// lidar.scan(&rays, &pose, &mut b);
+    /// assert_eq!(a.ranges, b.ranges);
+    /// ```
     pub fn reseed(&mut self, seed: u64) {
         self.seed = seed;
         self.scans = 0;
@@ -582,6 +941,15 @@ impl Lidar {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] as [`LidarNoise::validate`]; the noise is unchanged.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// lidar.set_noise(LidarNoise { dropout: 0.0, gaussian_std: 0.01 }).unwrap();
+    /// assert!(!lidar.noise().is_none());
+    /// assert!(lidar.set_noise(LidarNoise { dropout: f64::NAN, gaussian_std: 0.0 }).is_err());
+    /// assert_eq!(lidar.noise().gaussian_std, 0.01); // unchanged by the refused noise
+    /// ```
     pub fn set_noise(&mut self, noise: LidarNoise) -> SensorResult<()> {
         noise.validate()?;
         self.noise = noise;
@@ -592,6 +960,27 @@ impl Lidar {
     /// way `mode` says: typically the robot that carries the sensor, whose own body iGibson's
     /// scans leave out. See [`model_items`]. Ids of 2²⁴ and above are skipped (no scene has
     /// that many shapes).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// # let spec = LidarSpec::planar(4, std::f64::consts::TAU, 0.1, 5.0).unwrap();
+    /// # let mut lidar = Lidar::new(spec, LidarNoise::NONE, 1).unwrap();
+    /// # let mut scan = Scan::default();
+    /// # lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// // `scan`: four rays (back, right, ahead, left) from 0.5 m up; a wall 1.95 m ahead.
+    /// use hearth_sim::sensors::IgnoredHits;
+    /// assert_eq!(scan.hit_count(), 1);
+    /// lidar.ignore_items([scan.items[2]], IgnoredHits::NoReturn); // the wall
+    /// lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// assert_eq!(scan.hit_count(), 0);
+    /// ```
     pub fn ignore_items(&mut self, items: impl IntoIterator<Item = u32>, mode: IgnoredHits) {
         self.ignored_hits = mode;
         self.ignored.clear();
@@ -608,17 +997,38 @@ impl Lidar {
     }
 
     /// Number of items set with [`Lidar::ignore_items`].
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{IgnoredHits, Lidar, LidarNoise, LidarSpec};
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// lidar.ignore_items([4, 7, 7], IgnoredHits::PassThrough);
+    /// assert_eq!(lidar.ignored_count(), 2);
+    /// lidar.ignore_items([], IgnoredHits::PassThrough);
+    /// assert_eq!(lidar.ignored_count(), 0);
+    /// ```
     pub fn ignored_count(&self) -> usize {
         self.ignored.iter().filter(|&&b| b).count()
     }
 
     /// Worker threads a scan may use (rayon's pool of the calling thread; set
     /// `RAYON_NUM_THREADS` to change it).
+    ///
+    /// ```
+    /// assert!(hearth_sim::sensors::Lidar::threads() >= 1);
+    /// ```
     pub fn threads() -> usize {
         rayon::current_num_threads()
     }
 
     /// Sensor-frame unit ray directions (x forward, y left, z up), in ray order.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec};
+    /// let spec = LidarSpec::planar(3, std::f64::consts::PI, 0.1, 5.0).unwrap();
+    /// let lidar = Lidar::new(spec, LidarNoise::NONE, 3).unwrap();
+    /// let d = lidar.directions();
+    /// assert!((d[0][1] + 1.0).abs() < 1e-6 && (d[1][0] - 1.0).abs() < 1e-6); // right, then ahead
+    /// ```
     pub fn directions(&self) -> &[[f32; 3]] {
         &self.directions
     }
@@ -626,6 +1036,25 @@ impl Lidar {
     /// Scans the world as `rays` holds it (call [`RayScene::update`] after each world step)
     /// from `sensor_pose` (world pose of the sensor frame) into `out`, reusing its buffers.
     /// A non-finite pose gives a scan with no returns.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// let mut lidar = Lidar::new(LidarSpec::sick_tim571(), LidarNoise::NONE, 3).unwrap();
+    /// let mut scan = Scan::default();
+    /// lidar.scan(&rays, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// assert_eq!(scan.len(), 220);
+    /// assert!((scan.ranges[110] - 1.95).abs() < 0.01); // straight ahead, at the wall
+    /// // A pose that is not finite gives no returns.
+    /// lidar.scan(&rays, &Isometry3::translation(f64::NAN, 0.0, 0.5), &mut scan);
+    /// assert_eq!(scan.hit_count(), 0);
+    /// ```
     pub fn scan(&mut self, rays: &RayScene, sensor_pose: &Isometry3<f64>, out: &mut Scan) {
         self.scan_mapped(rays, &[], sensor_pose, out);
     }
@@ -865,6 +1294,12 @@ impl<'a> Caster<'a> {
 /// scanner, near its scan plane. Used by [`Lidar::scan_culled`], which keeps it up to date:
 /// every scan reads the item poses from the world, and the copy is rebuilt when the sensor or
 /// any shape has moved by more than half the margin since it was built.
+///
+/// ```
+/// use hearth_sim::sensors::CulledRays;
+/// let culled = CulledRays::default();
+/// assert!(culled.is_empty() && culled.rebuilds() == 0);
+/// ```
 #[derive(Debug, Default)]
 pub struct CulledRays {
     rays: Option<RayScene>,
@@ -932,16 +1367,68 @@ fn local_box(shape: &super::visuals::VisualShape) -> (Vector3<f64>, Vector3<f64>
 
 impl CulledRays {
     /// Number of shapes kept.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// use hearth_sim::sensors::CulledRays;
+    /// let mut lidar = Lidar::new(LidarSpec::hokuyo_urg_04lx(), LidarNoise::NONE, 3).unwrap();
+    /// let (mut local, mut scan) = (CulledRays::default(), Scan::default());
+    /// assert_eq!(local.len(), 0);
+    /// lidar.scan_culled(&mut local, &visuals, &world, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// assert!(local.len() >= 1 && local.len() <= visuals.items.len());
+    /// ```
     pub fn len(&self) -> usize {
         self.map.len()
     }
 
     /// Whether no shape is kept.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// use hearth_sim::sensors::CulledRays;
+    /// let mut lidar = Lidar::new(LidarSpec::hokuyo_urg_04lx(), LidarNoise::NONE, 3).unwrap();
+    /// let (mut local, mut scan) = (CulledRays::default(), Scan::default());
+    /// assert!(local.is_empty());
+    /// lidar.scan_culled(&mut local, &visuals, &world, &Isometry3::translation(0.0, 0.0, 0.5), &mut scan);
+    /// assert!(!local.is_empty()); // the wall is within reach
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.map.is_empty()
     }
 
     /// How many times the copy has been built.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, RayScene, Scan, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(2.0, 0.0, 1.0), false).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// # let mut rays = RayScene::new(&visuals);
+    /// # rays.update(&visuals, &world);
+    /// use hearth_sim::sensors::CulledRays;
+    /// let mut lidar = Lidar::new(LidarSpec::hokuyo_urg_04lx(), LidarNoise::NONE, 3).unwrap();
+    /// let (mut local, mut scan) = (CulledRays::default(), Scan::default());
+    /// let pose = Isometry3::translation(0.0, 0.0, 0.5);
+    /// lidar.scan_culled(&mut local, &visuals, &world, &pose, &mut scan);
+    /// lidar.scan_culled(&mut local, &visuals, &world, &pose, &mut scan);
+    /// assert_eq!(local.rebuilds(), 1); // nothing moved: the copy is reused
+    /// ```
     pub fn rebuilds(&self) -> u64 {
         self.rebuilds
     }
@@ -1082,6 +1569,19 @@ fn standard_normal(rng: &mut Pcg64Mcg) -> f64 {
 ///
 /// # Errors
 /// [`SensorError::World`] for an unknown model.
+///
+/// ```
+/// use hearth_sim::kinematics::RobotModel;
+/// use hearth_sim::sensors::{VisualScene, lidar_pose_in_base, model_items};
+/// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+/// let mut world = World::new(WorldConfig::default()).unwrap();
+/// let bot = RobotModel::builtin("turtlebot").unwrap();
+/// let bot = world.spawn_model(&bot, &nalgebra::Isometry3::identity(), SpawnOptions::free()).unwrap();
+/// let visuals = VisualScene::from_world(&world);
+/// let items = model_items(&visuals, &world, bot).unwrap();
+/// assert!(!items.is_empty());
+/// assert!(!items.contains(&0)); // item 0 is the ground
+/// ```
 pub fn model_items(visuals: &VisualScene, world: &World, robot: ModelHandle) -> SensorResult<Vec<u32>> {
     let name = world.model_name(robot)?;
     Ok(visuals
@@ -1151,6 +1651,18 @@ pub fn lidar_pose(world: &World, robot: ModelHandle, link: Option<&str>) -> Sens
 ///
 /// # Errors
 /// As [`lidar_pose`].
+///
+/// ```
+/// use hearth_sim::kinematics::RobotModel;
+/// use hearth_sim::sensors::{VisualScene, lidar_pose_in_base, model_items};
+/// use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+/// let mut world = World::new(WorldConfig::default()).unwrap();
+/// let bot = RobotModel::builtin("turtlebot").unwrap();
+/// let bot = world.spawn_model(&bot, &nalgebra::Isometry3::identity(), SpawnOptions::free()).unwrap();
+/// let pose = lidar_pose_in_base(&world, bot, None).unwrap();
+/// assert!(pose.translation.z > 0.0); // the laser sits above the base frame
+/// assert!(lidar_pose_in_base(&world, bot, Some("no_such_link")).is_err());
+/// ```
 pub fn lidar_pose_in_base(world: &World, robot: ModelHandle, link: Option<&str>) -> SensorResult<Isometry3<f64>> {
     let sensor = lidar_pose(world, robot, link)?;
     let base = world.base_pose(robot)?;

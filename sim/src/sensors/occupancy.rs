@@ -29,13 +29,40 @@ use super::error::{SensorError, SensorResult, check_param};
 use super::lidar::Scan;
 
 /// A cell seen occupied.
+///
+/// ```
+/// use hearth_sim::sensors::{FREE, OCCUPIED, UNKNOWN};
+/// assert!(OCCUPIED < UNKNOWN && UNKNOWN < FREE);
+/// assert_eq!(OCCUPIED as f32 * 0.5, 0.0); // iGibson's float value
+/// ```
 pub const OCCUPIED: u8 = 0;
 /// A cell not seen.
+///
+/// ```
+/// use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, UNKNOWN};
+/// let grid = OccupancyGrid::new(OccupancyGridSpec::default()).unwrap();
+/// assert_eq!(grid.count(UNKNOWN), 128 * 128); // a new grid has seen nothing
+/// ```
 pub const UNKNOWN: u8 = 1;
 /// A cell seen free.
+///
+/// ```
+/// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+/// # use nalgebra::Isometry3;
+/// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+/// let mut grid = OccupancyGrid::new(spec).unwrap();
+/// grid.update(&Scan::default(), &Isometry3::identity()).unwrap();
+/// assert_eq!(grid.at(0.0, 0.0), Some(FREE)); // the robot's footprint
+/// ```
 pub const FREE: u8 = 2;
 
 /// Largest grid side in cells.
+///
+/// ```
+/// use hearth_sim::sensors::{MAX_GRID_SIDE, OccupancyGridSpec};
+/// let spec = OccupancyGridSpec { size: MAX_GRID_SIDE + 1, ..Default::default() };
+/// assert!(spec.validate().is_err());
+/// ```
 pub const MAX_GRID_SIDE: usize = 8192;
 
 /// Size, resolution and footprint of an [`OccupancyGrid`].
@@ -74,6 +101,12 @@ impl Default for OccupancyGridSpec {
 
 impl OccupancyGridSpec {
     /// Side length of the grid in metres.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::OccupancyGridSpec;
+    /// let spec = OccupancyGridSpec { size: 40, resolution: 0.05, ..Default::default() };
+    /// assert!((spec.extent() - 2.0).abs() < 1e-12);
+    /// ```
     pub fn extent(&self) -> f64 {
         self.size as f64 * self.resolution
     }
@@ -83,6 +116,13 @@ impl OccupancyGridSpec {
     /// # Errors
     /// [`SensorError::InvalidParameter`] for a size outside `1..=`[`MAX_GRID_SIDE`], a
     /// resolution outside `[1e-4, 1e3]` m or a footprint radius outside `[0, 1e3]` m.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{OccupancyGridSpec, SensorError};
+    /// let spec = OccupancyGridSpec { resolution: 0.0, ..Default::default() };
+    /// assert!(matches!(spec.validate(), Err(SensorError::InvalidParameter { name: "resolution", .. })));
+    /// assert!(OccupancyGridSpec::default().validate().is_ok());
+    /// ```
     pub fn validate(&self) -> SensorResult<()> {
         if self.size == 0 || self.size > MAX_GRID_SIDE {
             return Err(SensorError::InvalidParameter {
@@ -146,6 +186,13 @@ impl OccupancyGrid {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] as [`OccupancyGridSpec::validate`].
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, UNKNOWN};
+    /// let grid = OccupancyGrid::new(OccupancyGridSpec { size: 8, ..Default::default() }).unwrap();
+    /// assert!(grid.cells().iter().all(|&c| c == UNKNOWN));
+    /// assert!(OccupancyGrid::new(OccupancyGridSpec { footprint_radius: -1.0, ..Default::default() }).is_err());
+    /// ```
     pub fn new(spec: OccupancyGridSpec) -> SensorResult<Self> {
         spec.validate()?;
         Ok(Self {
@@ -156,21 +203,54 @@ impl OccupancyGrid {
     }
 
     /// The spec.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// assert_eq!(grid.spec(), &spec);
+    /// ```
     pub fn spec(&self) -> &OccupancyGridSpec {
         &self.spec
     }
 
     /// Cells per side.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// assert_eq!(grid.size(), 10);
+    /// ```
     pub fn size(&self) -> usize {
         self.spec.size
     }
 
     /// The cells, row-major.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// assert_eq!(grid.cells().len(), 10 * 10);
+    /// ```
     pub fn cells(&self) -> &[u8] {
         &self.cells
     }
 
     /// The value of cell `(row, col)`, if inside.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// assert_eq!(grid.get(9, 9), Some(UNKNOWN));
+    /// assert_eq!(grid.get(10, 0), None);
+    /// ```
     pub fn get(&self, row: usize, col: usize) -> Option<u8> {
         (row < self.spec.size && col < self.spec.size).then(|| self.cells[row * self.spec.size + col])
     }
@@ -191,6 +271,16 @@ impl OccupancyGrid {
     }
 
     /// The base-frame `(x, y)` of the centre of cell `(row, col)`.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// let (x, y) = grid.cell_center(0, 9); // ahead and to the right
+    /// assert!((x - 0.45).abs() < 1e-12 && (y + 0.45).abs() < 1e-12);
+    /// assert_eq!(grid.cell_of(x, y), Some((0, 9)));
+    /// ```
     pub fn cell_center(&self, row: usize, col: usize) -> (f64, f64) {
         let h = self.spec.size as f64 / 2.0;
         let res = self.spec.resolution;
@@ -198,17 +288,49 @@ impl OccupancyGrid {
     }
 
     /// The value at the base-frame point `(x, y)`, if inside the grid.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// grid.update(&Scan::default(), &Isometry3::identity()).unwrap();
+    /// assert_eq!(grid.at(0.05, 0.05), Some(FREE)); // within the footprint
+    /// assert_eq!(grid.at(0.45, 0.45), Some(UNKNOWN));
+    /// assert_eq!(grid.at(1.0, 0.0), None); // outside the 1 m grid
+    /// ```
     pub fn at(&self, x: f64, y: f64) -> Option<u8> {
         self.cell_of(x, y).and_then(|(r, c)| self.get(r, c))
     }
 
     /// Number of cells holding `value`.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// grid.update(&Scan::default(), &Isometry3::identity()).unwrap();
+    /// let free = grid.count(FREE);
+    /// assert!(free > 0 && free + grid.count(UNKNOWN) == 100);
+    /// ```
     pub fn count(&self, value: u8) -> usize {
         self.cells.iter().filter(|&&v| v == value).count()
     }
 
     /// The cells in iGibson's float convention (0.0 occupied, 0.5 unknown, 1.0 free),
     /// row-major, into `out` (cleared first).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{OccupancyGrid, OccupancyGridSpec, Scan, FREE, UNKNOWN};
+    /// # use nalgebra::Isometry3;
+    /// let spec = OccupancyGridSpec { size: 10, resolution: 0.1, ..Default::default() };
+    /// let mut grid = OccupancyGrid::new(spec).unwrap();
+    /// let mut out = Vec::new();
+    /// grid.to_f32_into(&mut out);
+    /// assert_eq!(out.len(), 100);
+    /// assert!(out.iter().all(|&v| v == 0.5)); // all unknown
+    /// ```
     pub fn to_f32_into(&self, out: &mut Vec<f32>) {
         out.clear();
         out.extend(self.cells.iter().map(|&v| v as f32 * 0.5));
@@ -228,6 +350,28 @@ impl OccupancyGrid {
     /// # Errors
     /// [`SensorError::InvalidParameter`] when the scan has more than one beam or the pose is
     /// not finite; the grid is unchanged.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{Lidar, LidarNoise, LidarSpec, OccupancyGrid, OccupancyGridSpec, RayScene, Scan};
+    /// use hearth_sim::sensors::{FREE, OCCUPIED, VisualScene};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("wall", [0.05, 5.0, 1.0], &Isometry3::translation(1.0, 0.0, 1.0), false).unwrap();
+    /// let visuals = VisualScene::from_world(&world);
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// let spec = LidarSpec::planar(31, std::f64::consts::FRAC_PI_2, 0.05, 5.0).unwrap();
+    /// let mut lidar = Lidar::new(spec, LidarNoise::NONE, 0).unwrap();
+    /// let (mut scan, sensor_in_base) = (Scan::default(), Isometry3::translation(0.0, 0.0, 0.3));
+    /// lidar.scan(&rays, &sensor_in_base, &mut scan); // base at the world origin
+    /// let mut grid = OccupancyGrid::new(OccupancyGridSpec { size: 32, resolution: 0.1, ..Default::default() }).unwrap();
+    /// grid.update(&scan, &sensor_in_base).unwrap();
+    /// assert_eq!(grid.at(0.96, 0.0), Some(OCCUPIED));
+    /// assert_eq!(grid.at(0.5, 0.0), Some(FREE));
+    /// scan.beams = 2; // the grid takes planar scans only
+    /// assert!(grid.update(&scan, &sensor_in_base).is_err());
+    /// ```
     pub fn update(&mut self, scan: &Scan, sensor_in_base: &Isometry3<f64>) -> SensorResult<()> {
         if scan.beams > 1 {
             return Err(SensorError::InvalidParameter {

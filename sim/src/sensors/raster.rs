@@ -285,6 +285,16 @@ impl RasterCamera {
     ///
     /// # Errors
     /// [`SensorError::InvalidResolution`] / [`SensorError::InvalidParameter`] for bad intrinsics.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraIntrinsics, RasterCamera, VisualScene};
+    /// let scene = VisualScene::default();
+    /// let camera = RasterCamera::new(&scene, CameraIntrinsics::new(32, 24, 60.0).unwrap()).unwrap();
+    /// assert_eq!(camera.triangles(), 0);
+    /// let mut bad = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// bad.width = 0;
+    /// assert!(RasterCamera::new(&scene, bad).is_err());
+    /// ```
     pub fn new(scene: &VisualScene, intrinsics: CameraIntrinsics) -> SensorResult<Self> {
         intrinsics.validate()?;
         let mesh = tessellate(scene);
@@ -327,6 +337,18 @@ impl RasterCamera {
     }
 
     /// The intrinsics.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, RasterCamera, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let mut camera = RasterCamera::new(&scene, CameraIntrinsics::new(32, 24, 60.0).unwrap()).unwrap();
+    /// assert_eq!((camera.intrinsics().width, camera.intrinsics().height), (32, 24));
+    /// ```
     pub fn intrinsics(&self) -> &CameraIntrinsics {
         &self.intrinsics
     }
@@ -347,6 +369,21 @@ impl RasterCamera {
     }
 
     /// How many items passed the frustum test in the last frame.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, RasterCamera, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let mut camera = RasterCamera::new(&scene, CameraIntrinsics::new(32, 24, 60.0).unwrap()).unwrap();
+    /// let mut frame = Frame::default();
+    /// let depth = ModalitySet::EMPTY.with(Modality::Depth);
+    /// camera.render(&scene.world_poses(&world), &pose, depth, &mut frame).unwrap();
+    /// assert_eq!(camera.items_drawn(), 2); // the ground and the crate
+    /// ```
     pub fn items_drawn(&self) -> usize {
         self.drawn
     }
@@ -358,6 +395,25 @@ impl RasterCamera {
     /// [`SensorError::Unsupported`] when `modalities` holds colour or flow;
     /// [`SensorError::InvalidParameter`] when `item_poses` has the wrong length or `camera` is
     /// not finite.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, RasterCamera, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let mut camera = RasterCamera::new(&scene, CameraIntrinsics::new(32, 24, 60.0).unwrap()).unwrap();
+    /// let mut frame = Frame::default();
+    /// let poses = scene.world_poses(&world);
+    /// let set = ModalitySet::EMPTY.with(Modality::Depth).with(Modality::InsSeg);
+    /// camera.render(&poses, &pose, set, &mut frame).unwrap();
+    /// assert!((frame.depth[frame.index(16, 12)] - 2.5).abs() < 1e-3);
+    /// assert_eq!(frame.ins_seg[frame.index(16, 12)], 2); // the crate
+    /// let rgb = ModalitySet::EMPTY.with(Modality::Rgb);
+    /// assert!(camera.render(&poses, &pose, rgb, &mut frame).is_err()); // no colour here
+    /// ```
     pub fn render(
         &mut self,
         item_poses: &[Isometry3<f64>],

@@ -10,16 +10,63 @@ use parry3d::math::Vector;
 use super::visuals::{PbrMaterial, SceneLight};
 
 /// Scale from scene irradiance to display radiance.
+///
+/// ```
+/// use hearth_sim::sensors::shading::{EXPOSURE, to_srgb8};
+/// use parry3d::math::Vector;
+/// // A radiance that exposure scales to 1 tone-maps to ½, about 188 in sRGB.
+/// let c = to_srgb8(Vector::splat(1.0 / (EXPOSURE * std::f32::consts::PI)));
+/// assert!(c.iter().all(|v| (187..=189).contains(v)), "{c:?}");
+/// ```
 pub const EXPOSURE: f32 = 0.12;
-/// Ambient irradiance from the sky (above) and the ground (below), in scene units.
+/// Ambient irradiance from the sky, in scene units: what a surface facing straight up
+/// receives (blended towards [`AMBIENT_GROUND`] as the normal turns down).
+///
+/// ```
+/// # use hearth_sim::sensors::PbrMaterial;
+/// let white = PbrMaterial { base_color: [1.0; 4], metallic: 0.0, roughness: 0.5, class: None };
+/// use hearth_sim::sensors::shading::{AMBIENT_SKY, shade};
+/// use parry3d::math::Vector;
+/// let up = shade(&white, Vector::Z, Vector::Z, &[], false); // no lights: ambient only
+/// assert!((up - Vector::from(AMBIENT_SKY) / std::f32::consts::PI).length() < 1e-6);
+/// ```
 pub const AMBIENT_SKY: [f32; 3] = [1.6, 1.7, 1.9];
-/// Ambient irradiance from below.
+/// Ambient irradiance from the ground: what a surface facing straight down receives.
+///
+/// ```
+/// # use hearth_sim::sensors::PbrMaterial;
+/// let white = PbrMaterial { base_color: [1.0; 4], metallic: 0.0, roughness: 0.5, class: None };
+/// use hearth_sim::sensors::shading::{AMBIENT_GROUND, shade};
+/// use parry3d::math::Vector;
+/// let down = shade(&white, Vector::NEG_Z, Vector::NEG_Z, &[], false);
+/// assert!((down - Vector::from(AMBIENT_GROUND) / std::f32::consts::PI).length() < 1e-6);
+/// ```
 pub const AMBIENT_GROUND: [f32; 3] = [0.8, 0.75, 0.7];
-/// Colour of pixels that see nothing (linear RGB, before tone mapping: a pale sky).
+/// Colour of the ray-cast camera's pixels that see nothing, as sRGB bytes (a pale sky).
+///
+/// ```
+/// use hearth_sim::sensors::shading::BACKGROUND_SRGB;
+/// use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, RaycastCamera, RenderOptions, VisualScene};
+/// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+/// let mut camera = RaycastCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+/// let mut frame = Frame::default();
+/// let rgb = ModalitySet::EMPTY.with(Modality::Rgb);
+/// camera.render(&[], &nalgebra::Isometry3::identity(), rgb, &mut frame).unwrap(); // an empty scene
+/// assert!(frame.rgb.chunks(3).all(|c| c == BACKGROUND_SRGB));
+/// ```
 pub const BACKGROUND_SRGB: [u8; 3] = [178, 196, 214];
 
 /// A light as seen from a surface point: unit direction towards the light and irradiance
 /// (colour × intensity, before the cosine), and the distance to it (∞ for the sun).
+///
+/// ```
+/// use hearth_sim::sensors::SceneLight;
+/// use hearth_sim::sensors::shading::light_at;
+/// use parry3d::math::Vector;
+/// let sun = SceneLight::Directional { direction: [0.0, 0.0, -1.0], color: [1.0; 3], intensity: 5.0 };
+/// let s = light_at(&sun, Vector::ZERO);
+/// assert_eq!((s.to_light, s.irradiance, s.distance), (Vector::Z, Vector::splat(5.0), f32::INFINITY));
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
     /// Unit vector from the point towards the light.
@@ -30,7 +77,18 @@ pub struct LightSample {
     pub distance: f32,
 }
 
-/// The lights as seen from `p`.
+/// A light as seen from the world point `p`.
+///
+/// ```
+/// use hearth_sim::sensors::SceneLight;
+/// use hearth_sim::sensors::shading::light_at;
+/// use parry3d::math::Vector;
+/// let lamp = SceneLight::Point { position: [0.0, 0.0, 2.0], color: [1.0; 3], intensity: 8.0 };
+/// let s = light_at(&lamp, Vector::ZERO);
+/// assert_eq!(s.to_light, Vector::Z);
+/// assert_eq!(s.distance, 2.0);
+/// assert_eq!(s.irradiance, Vector::splat(2.0)); // 8 cd at 2 m
+/// ```
 pub fn light_at(light: &SceneLight, p: Vector) -> LightSample {
     match *light {
         SceneLight::Point {
@@ -78,6 +136,21 @@ fn visibility(n_l: f32, n_v: f32, alpha: f32) -> f32 {
 ///
 /// `n` is the unit normal, `v` the unit vector towards the viewer, `lights` the light samples
 /// that reach the point (shadowed ones left out), `pbr` switches GGX specular on.
+///
+/// ```
+/// # use hearth_sim::sensors::PbrMaterial;
+/// let white = PbrMaterial { base_color: [1.0; 4], metallic: 0.0, roughness: 0.5, class: None };
+/// use hearth_sim::sensors::SceneLight;
+/// use hearth_sim::sensors::shading::{light_at, shade};
+/// use parry3d::math::Vector;
+/// let sun = SceneLight::Directional { direction: [0.0, 0.0, -1.0], color: [1.0; 3], intensity: 5.0 };
+/// let lights = [light_at(&sun, Vector::ZERO)];
+/// let lit = shade(&white, Vector::Z, Vector::Z, &lights, true);
+/// let unlit = shade(&white, Vector::Z, Vector::Z, &[], true);
+/// assert!(lit.x > unlit.x);
+/// let facing_away = shade(&white, Vector::NEG_Z, Vector::NEG_Z, &lights, true);
+/// assert!(facing_away.x < unlit.x); // no sun, and ground ambient only
+/// ```
 pub fn shade(material: &PbrMaterial, n: Vector, v: Vector, lights: &[LightSample], pbr: bool) -> Vector {
     let base = Vector::new(material.base_color[0], material.base_color[1], material.base_color[2]);
     let metallic = material.metallic.clamp(0.0, 1.0);
@@ -134,6 +207,14 @@ fn srgb_lut() -> &'static [u8; SRGB_LUT_SIZE] {
 }
 
 /// Exposure, Reinhard tone map and sRGB encoding of a linear radiance.
+///
+/// ```
+/// use hearth_sim::sensors::shading::to_srgb8;
+/// use parry3d::math::Vector;
+/// assert_eq!(to_srgb8(Vector::ZERO), [0, 0, 0]);
+/// let c = to_srgb8(Vector::new(1e6, 1.0, -1.0)); // tone-mapped, clamped below at 0
+/// assert!(c[0] >= 254 && c[1] > 0 && c[2] == 0);
+/// ```
 pub fn to_srgb8(radiance: Vector) -> [u8; 3] {
     let c = radiance * EXPOSURE * std::f32::consts::PI;
     let lut = srgb_lut();

@@ -76,6 +76,13 @@ pub struct PbrMaterial {
 
 /// Metalness and roughness of each material class (typical values of metallic-roughness
 /// material libraries, rounded).
+///
+/// ```
+/// use hearth_sim::{assets::Material, sensors::metallic_roughness};
+/// assert_eq!(metallic_roughness(Material::Metal).0, 1.0);
+/// let (metallic, roughness) = metallic_roughness(Material::Rubber);
+/// assert!(metallic == 0.0 && roughness > metallic_roughness(Material::Glass).1);
+/// ```
 pub fn metallic_roughness(m: Material) -> (f32, f32) {
     match m {
         Material::Metal => (1.0, 0.35),
@@ -95,6 +102,13 @@ pub fn metallic_roughness(m: Material) -> (f32, f32) {
 
 impl PbrMaterial {
     /// The table material with its base colour.
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Material, sensors::PbrMaterial};
+    /// let m = PbrMaterial::of(Material::Wood);
+    /// assert_eq!(m.class, Some(Material::Wood));
+    /// assert_eq!((m.metallic, m.roughness), hearth_sim::sensors::metallic_roughness(Material::Wood));
+    /// ```
     pub fn of(m: Material) -> Self {
         let (metallic, roughness) = metallic_roughness(m);
         let c = m.props().rgba;
@@ -108,6 +122,15 @@ impl PbrMaterial {
 
     /// A URDF visual's material: its class when the name is a table material (`wood`), its
     /// colour when given, otherwise a grey; names containing `metal` are metallic.
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Material, sensors::PbrMaterial};
+    /// assert_eq!(PbrMaterial::from_urdf(Some("wood"), None), PbrMaterial::of(Material::Wood));
+    /// let steel = PbrMaterial::from_urdf(Some("brushed_steel"), Some([0.2, 0.3, 0.4, 1.0]));
+    /// assert_eq!((steel.metallic, steel.class), (1.0, None));
+    /// assert_eq!(steel.base_color, [0.2, 0.3, 0.4, 1.0]);
+    /// assert_eq!(PbrMaterial::from_urdf(None, None).base_color, [0.6, 0.6, 0.6, 1.0]);
+    /// ```
     pub fn from_urdf(name: Option<&str>, rgba: Option<[f64; 4]>) -> Self {
         let class = name.and_then(|n| n.parse::<Material>().ok());
         let mut m = match class {
@@ -145,27 +168,88 @@ pub struct SemanticClass;
 
 impl SemanticClass {
     /// Nothing hit.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::name(SemanticClass::BACKGROUND), Some("background"));
+    /// ```
     pub const BACKGROUND: u32 = 0;
     /// Floors and the ground.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::VisualScene;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(scene.items[0].semantic, SemanticClass::FLOOR); // the ground
+    /// ```
     pub const FLOOR: u32 = 1;
     /// Walls.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::id("wall"), Some(SemanticClass::WALL));
+    /// ```
     pub const WALL: u32 = 2;
     /// Ceilings.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::name(SemanticClass::CEILING), Some("ceiling"));
+    /// ```
     pub const CEILING: u32 = 3;
     /// Robots.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::of_model("fetch"), SemanticClass::ROBOT);
+    /// ```
     pub const ROBOT: u32 = 4;
     /// Objects of no known category.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::VisualScene;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(scene.items[1].semantic, SemanticClass::OBJECT); // a plain box
+    /// ```
     pub const OBJECT: u32 = 5;
     /// Id of the first asset category.
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Category, sensors::SemanticClass};
+    /// assert_eq!(SemanticClass::of_category(Category::ALL[0]), SemanticClass::FIRST_CATEGORY);
+    /// ```
     pub const FIRST_CATEGORY: u32 = 10;
 
     /// The class id of an asset category.
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Category, sensors::SemanticClass};
+    /// let id = SemanticClass::of_category(Category::ALL[2]);
+    /// assert_eq!(id, SemanticClass::FIRST_CATEGORY + 2);
+    /// assert_eq!(SemanticClass::name(id), Some(Category::ALL[2].name()));
+    /// ```
     pub fn of_category(c: Category) -> u32 {
         let i = Category::ALL.iter().position(|&x| x == c).unwrap_or(0);
         Self::FIRST_CATEGORY + i as u32
     }
 
     /// The name of a class id.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::name(SemanticClass::ROBOT), Some("robot"));
+    /// assert_eq!(SemanticClass::name(7), None); // between the building classes and the categories
+    /// assert_eq!(SemanticClass::name(u32::MAX), None);
+    /// ```
     pub fn name(id: u32) -> Option<&'static str> {
         match id {
             Self::BACKGROUND => Some("background"),
@@ -182,11 +266,24 @@ impl SemanticClass {
     }
 
     /// The id of a class name.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::SemanticClass;
+    /// assert_eq!(SemanticClass::id("floor"), Some(SemanticClass::FLOOR));
+    /// assert_eq!(SemanticClass::id("spaceship"), None);
+    /// ```
     pub fn id(name: &str) -> Option<u32> {
         (0..Self::FIRST_CATEGORY + Category::ALL.len() as u32).find(|&i| Self::name(i) == Some(name))
     }
 
     /// Every class as (id, name).
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Category, sensors::SemanticClass};
+    /// let all = SemanticClass::all();
+    /// assert_eq!(all[0], (0, "background"));
+    /// assert_eq!(all.len(), 6 + Category::ALL.len());
+    /// ```
     pub fn all() -> Vec<(u32, &'static str)> {
         (0..Self::FIRST_CATEGORY + Category::ALL.len() as u32)
             .filter_map(|i| Self::name(i).map(|n| (i, n)))
@@ -194,6 +291,13 @@ impl SemanticClass {
     }
 
     /// The class of a model by its model name (`fridge_2` → fridge, built-in robots → robot).
+    ///
+    /// ```
+    /// use hearth_sim::{assets::Category, sensors::SemanticClass};
+    /// assert_eq!(SemanticClass::of_model("fridge_2"), SemanticClass::of_category(Category::Fridge));
+    /// assert_eq!(SemanticClass::of_model("turtlebot"), SemanticClass::ROBOT);
+    /// assert_eq!(SemanticClass::of_model("crate"), SemanticClass::OBJECT);
+    /// ```
     pub fn of_model(model_name: &str) -> u32 {
         if hearth_kinematics::builtin_names().contains(&model_name) {
             return Self::ROBOT;
@@ -220,6 +324,20 @@ impl SemanticClass {
 }
 
 /// One visual shape and what it is.
+///
+/// ```
+/// # use hearth_sim::sensors::VisualScene;
+/// # use hearth_sim::world::{World, WorldConfig};
+/// # use nalgebra::Isometry3;
+/// let mut world = World::new(WorldConfig::default()).unwrap();
+/// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+/// let scene = VisualScene::from_world(&world);
+/// use hearth_sim::sensors::VisualShape;
+/// let item = &scene.items[1]; // the crate
+/// assert!(item.body.is_some()); // moves with its body
+/// assert!(matches!(item.shape, VisualShape::Box { half } if half == [0.1; 3]));
+/// assert_eq!(scene.instances[item.instance as usize - 1].name, "crate");
+/// ```
 #[derive(Clone, Debug)]
 pub struct VisualItem {
     /// The body it is attached to (`None`: a static visual, `local` is its world pose).
@@ -237,6 +355,18 @@ pub struct VisualItem {
 }
 
 /// A thing with an instance id: a model (robot or object), a building piece, a box.
+///
+/// ```
+/// # use hearth_sim::sensors::VisualScene;
+/// # use hearth_sim::world::{World, WorldConfig};
+/// # use nalgebra::Isometry3;
+/// let mut world = World::new(WorldConfig::default()).unwrap();
+/// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+/// let scene = VisualScene::from_world(&world);
+/// use hearth_sim::sensors::Instance;
+/// let crate_ = Instance { name: "crate".into(), semantic: scene.items[1].semantic };
+/// assert_eq!(scene.instances[1], crate_);
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Instance {
     /// Model instance name or body name.
@@ -246,6 +376,18 @@ pub struct Instance {
 }
 
 /// A light in the form renderers use.
+///
+/// ```
+/// # use hearth_sim::sensors::VisualScene;
+/// # use hearth_sim::world::{World, WorldConfig};
+/// # use nalgebra::Isometry3;
+/// let mut world = World::new(WorldConfig::default()).unwrap();
+/// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+/// let scene = VisualScene::from_world(&world);
+/// use hearth_sim::sensors::SceneLight;
+/// // A world without lights gets the default sun.
+/// assert!(matches!(scene.lights[..], [SceneLight::Directional { .. }]));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SceneLight {
     /// Point light at `position` with `intensity` (candela).
@@ -269,6 +411,13 @@ pub enum SceneLight {
 }
 
 /// The lights used when a world has none: a sun from above and the side.
+///
+/// ```
+/// use hearth_sim::sensors::{SceneLight, default_lights};
+/// let [SceneLight::Directional { direction, .. }] = default_lights()[..] else { unreachable!() };
+/// assert!(direction[2] < 0.0); // shining downwards
+/// assert!((direction.iter().map(|d| d * d).sum::<f32>() - 1.0).abs() < 1e-6);
+/// ```
 pub fn default_lights() -> Vec<SceneLight> {
     let d = Vector3::new(0.3f32, 0.4, -1.0).normalize();
     vec![SceneLight::Directional {
@@ -279,6 +428,21 @@ pub fn default_lights() -> Vec<SceneLight> {
 }
 
 /// Converts scene lights (spot lights become point lights at their position).
+///
+/// ```
+/// use hearth_sim::scene::{Light, LightKind};
+/// use hearth_sim::sensors::{SceneLight, scene_lights};
+/// let spot = Light {
+///     name: "lamp".into(),
+///     kind: LightKind::Spot,
+///     position: [1.0, 2.0, 2.5],
+///     direction: Some([0.0, 0.0, -1.0]),
+///     color: [1.0; 3],
+///     intensity: 50.0,
+/// };
+/// let lights = scene_lights(&[spot]);
+/// assert_eq!(lights, vec![SceneLight::Point { position: [1.0, 2.0, 2.5], color: [1.0; 3], intensity: 50.0 }]);
+/// ```
 pub fn scene_lights(lights: &[Light]) -> Vec<SceneLight> {
     lights
         .iter()
@@ -360,6 +524,15 @@ impl VisualScene {
     /// Collects every visual of `world`: static visuals, plain bodies (the ground, building
     /// pieces, boxes: their collider cuboids, in their [`World::body_material`]), then each
     /// model's link visuals. The ground is left out when static floor slabs cover it.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{SemanticClass, VisualScene};
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// assert_eq!(scene.items.len(), 1); // the ground alone
+    /// assert_eq!(scene.instances[0].semantic, SemanticClass::FLOOR);
+    /// ```
     pub fn from_world(world: &World) -> Self {
         let mut scene = VisualScene::default();
         let s = &world.state;
@@ -445,6 +618,18 @@ impl VisualScene {
     }
 
     /// World pose of every item now (same order as `items`).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::VisualScene;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// let poses = scene.world_poses(&world);
+    /// assert_eq!(poses.len(), scene.items.len());
+    /// assert!((poses[1].translation.x - 1.0).abs() < 1e-9);
+    /// ```
     pub fn world_poses(&self, world: &World) -> Vec<Isometry3<f64>> {
         let mut out = Vec::with_capacity(self.items.len());
         self.world_poses_into(world, &mut out);
@@ -453,6 +638,19 @@ impl VisualScene {
 
     /// [`VisualScene::world_poses`] into a reused buffer. Items whose body has left the world
     /// keep the identity pose.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::VisualScene;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// let mut poses = vec![Isometry3::identity(); 9];
+    /// scene.world_poses_into(&world, &mut poses);
+    /// assert_eq!(poses.len(), 2);
+    /// assert!((poses[1].translation.x - 1.0).abs() < 1e-9);
+    /// ```
     pub fn world_poses_into(&self, world: &World, out: &mut Vec<Isometry3<f64>>) {
         out.clear();
         let bodies = &world.state.bodies;
@@ -480,6 +678,17 @@ impl VisualScene {
 
     /// Number of triangles a tessellation with `segments` around each round shape has (for
     /// sizing GPU buffers and reports).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::VisualScene;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 0.0, 0.1), true).unwrap();
+    /// let scene = VisualScene::from_world(&world);
+    /// let ground = scene.triangle_estimate(16) - 12; // the crate is a box: 12 triangles
+    /// assert_eq!(scene.triangle_estimate(32), ground + 12);
+    /// ```
     pub fn triangle_estimate(&self, segments: usize) -> usize {
         self.items
             .iter()
@@ -494,6 +703,15 @@ impl VisualScene {
 }
 
 /// The pose of an isometry's parts as f32 arrays (translation, quaternion xyzw).
+///
+/// ```
+/// use hearth_sim::sensors::pose_f32;
+/// use nalgebra::{Isometry3, Vector3};
+/// let p = Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::z() * std::f64::consts::PI);
+/// let (t, q) = pose_f32(&p);
+/// assert_eq!(t, [1.0, 2.0, 3.0]);
+/// assert!((q[2].abs() - 1.0).abs() < 1e-6 && q[3].abs() < 1e-6); // half a turn about z
+/// ```
 pub fn pose_f32(p: &Isometry3<f64>) -> ([f32; 3], [f32; 4]) {
     let t: Translation3<f64> = p.translation;
     let q: UnitQuaternion<f64> = p.rotation;

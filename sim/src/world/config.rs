@@ -59,6 +59,11 @@ impl Default for WorldConfig {
 
 impl WorldConfig {
     /// Seconds of simulated time per control step (`timestep × substeps`).
+    ///
+    /// ```
+    /// # use hearth_sim::world::WorldConfig;
+    /// assert!((WorldConfig::default().control_dt() - 4.0 / 120.0).abs() < 1e-12);
+    /// ```
     pub fn control_dt(&self) -> f64 {
         self.timestep * f64::from(self.substeps)
     }
@@ -67,6 +72,12 @@ impl WorldConfig {
     ///
     /// # Errors
     /// [`WorldError::InvalidConfig`] naming the first bad field.
+    ///
+    /// ```
+    /// # use hearth_sim::world::WorldConfig;
+    /// assert!(WorldConfig::default().validate().is_ok());
+    /// assert!(WorldConfig { gravity: [0.0, 0.0, f64::NAN], ..WorldConfig::default() }.validate().is_err());
+    /// ```
     pub fn validate(&self) -> WorldResult<()> {
         let bad = |field: &'static str, reason: &str| {
             Err(WorldError::InvalidConfig {

@@ -42,6 +42,12 @@ pub enum JointCommand {
 
 impl JointCommand {
     /// The commanded value, if any.
+    ///
+    /// ```
+    /// # use hearth_sim::world::JointCommand;
+    /// assert_eq!(JointCommand::Effort { value: -2.0 }.target(), Some(-2.0));
+    /// assert_eq!(JointCommand::default().target(), None);
+    /// ```
     pub fn target(self) -> Option<f64> {
         match self {
             JointCommand::Off => None,
@@ -80,6 +86,14 @@ impl JointGains {
     ///
     /// # Errors
     /// [`WorldError::NonFinite`] or [`WorldError::OutOfRange`] naming the joint.
+    ///
+    /// ```
+    /// # use hearth_sim::world::JointGains;
+    /// let g = JointGains { stiffness: 100.0, damping: 20.0, velocity_gain: 10.0, max_effort: f64::INFINITY };
+    /// assert!(g.validate("j").is_ok());
+    /// assert!(JointGains { max_effort: 0.0, ..g }.validate("j").is_err());
+    /// assert!(JointGains { damping: -1.0, ..g }.validate("j").is_err());
+    /// ```
     pub fn validate(&self, joint: &str) -> WorldResult<()> {
         check_range("stiffness", joint, self.stiffness, 0.0, f64::MAX)?;
         check_range("damping", joint, self.damping, 0.0, f64::MAX)?;
@@ -149,6 +163,13 @@ pub struct DiffDriveConfig {
 
 impl DiffDriveConfig {
     /// The parameters of a built-in robot (`fetch`, `locobot`, `turtlebot`).
+    ///
+    /// ```
+    /// # use hearth_sim::world::DiffDriveConfig;
+    /// let d = DiffDriveConfig::for_builtin("turtlebot").unwrap();
+    /// assert_eq!(d.casters.len(), 2);
+    /// assert!(DiffDriveConfig::for_builtin("panda").is_none());
+    /// ```
     pub fn for_builtin(robot: &str) -> Option<Self> {
         let (l, r, radius, width, casters): (_, _, _, _, &[&str]) = match robot {
             "fetch" => (
@@ -271,6 +292,13 @@ pub const FINGER_PAD_FRICTION: f64 = 1.5;
 
 impl GripperConfig {
     /// The gripper of a built-in robot (`panda`, `fetch`, `locobot`).
+    ///
+    /// ```
+    /// # use hearth_sim::world::GripperConfig;
+    /// let g = GripperConfig::for_builtin("locobot").unwrap();
+    /// assert_eq!(g.joints.len(), g.closed.len());
+    /// assert!(GripperConfig::for_builtin("turtlebot").is_none());
+    /// ```
     pub fn for_builtin(robot: &str) -> Option<Self> {
         let (joints, open, closed): (&[&str], &[f64], &[f64]) = match robot {
             "panda" => (&["panda_finger_joint1"], &[0.04], &[0.0]),
@@ -443,6 +471,21 @@ impl World {
     ///
     /// # Errors
     /// Unknown model; wrong length; NaN or beyond the velocity limit.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let mut v = vec![0.0; panda.dof()];
+    /// v[0] = 0.5;
+    /// world.set_velocity_targets(arm, &v)?;
+    /// for _ in 0..5 { world.step(); }
+    /// assert!(world.joint_positions(arm)?[0] > 0.02);
+    /// assert!(world.set_velocity_targets(arm, &[0.0]).is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn set_velocity_targets(&mut self, handle: ModelHandle, v: &[f64]) -> WorldResult<()> {
         self.set_all(handle, "velocity targets", v, check_velocity, |target| {
             JointCommand::Velocity { target }
@@ -453,6 +496,20 @@ impl World {
     ///
     /// # Errors
     /// Unknown model; wrong length; NaN or beyond the effort limit.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{JointCommand, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let mut tau = vec![0.0; panda.dof()];
+    /// tau[0] = 1.0;
+    /// world.set_efforts(arm, &tau)?;
+    /// assert_eq!(world.joint_commands(arm)?[0], JointCommand::Effort { value: 1.0 });
+    /// assert_eq!(world.joint_efforts(arm)?[0], 1.0);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn set_efforts(&mut self, handle: ModelHandle, tau: &[f64]) -> WorldResult<()> {
         self.set_all(handle, "efforts", tau, check_effort, |value| JointCommand::Effort {
             value,
@@ -519,6 +576,18 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{JointCommand, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.set_joint_command(arm, "panda_joint2", JointCommand::Off)?;
+    /// assert_eq!(world.joint_commands(arm)?.len(), panda.dof());
+    /// assert_eq!(world.joint_commands(arm)?[1], JointCommand::Off);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_commands(&self, handle: ModelHandle) -> WorldResult<&[JointCommand]> {
         Ok(&self.entry(handle)?.commands)
     }
@@ -527,6 +596,18 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let gains = world.joint_gains(arm)?;
+    /// assert_eq!(gains.len(), panda.dof());
+    /// assert!(gains.iter().all(|g| g.validate("joint").is_ok()));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_gains(&self, handle: ModelHandle) -> WorldResult<&[JointGains]> {
         Ok(&self.entry(handle)?.gains)
     }
@@ -535,6 +616,19 @@ impl World {
     ///
     /// # Errors
     /// Unknown model or joint; invalid gains.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{JointGains, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let soft = JointGains { stiffness: 50.0, damping: 5.0, velocity_gain: 5.0, max_effort: 10.0 };
+    /// world.set_joint_gains(arm, "panda_joint1", soft)?;
+    /// assert_eq!(world.joint_gains(arm)?[0], soft);
+    /// assert!(world.set_joint_gains(arm, "panda_joint1", JointGains { stiffness: -1.0, ..soft }).is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn set_joint_gains(&mut self, handle: ModelHandle, joint: &str, gains: JointGains) -> WorldResult<()> {
         let v = self.entry(handle)?.variable_by_name(joint)?;
         gains.validate(joint)?;
@@ -548,6 +642,21 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::NoController`] without wheels; NaN; wheel speeds beyond their limit.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{JointCommand, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let bot = RobotModel::builtin("turtlebot").unwrap();
+    /// let base = world.spawn_model(&bot, &nalgebra::Isometry3::identity(), SpawnOptions::free())?;
+    /// world.drive(base, 0.1, 0.0)?;
+    /// let commands = world.joint_commands(base)?;
+    /// assert_eq!(commands.iter().filter(|c| matches!(c, JointCommand::Velocity { .. })).count(), 2);
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::translation(2.0, 0.0, 0.0), SpawnOptions::fixed())?;
+    /// assert!(world.drive(arm, 0.1, 0.0).is_err()); // no wheels
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn drive(&mut self, handle: ModelHandle, v: f64, omega: f64) -> WorldResult<()> {
         let entry = self.entry(handle)?;
         check_finite("base speed", "v", v)?;
@@ -616,6 +725,21 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::NoController`] without a gripper.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.gripper_open(arm)?;
+    /// for _ in 0..15 { world.step(); }
+    /// assert!(world.joint_positions(arm)?[7] > 0.035);
+    /// let bot = RobotModel::builtin("turtlebot").unwrap();
+    /// let base = world.spawn_model(&bot, &nalgebra::Isometry3::translation(2.0, 0.0, 0.0), SpawnOptions::free())?;
+    /// assert!(world.gripper_open(base).is_err()); // no gripper
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn gripper_open(&mut self, handle: ModelHandle) -> WorldResult<()> {
         let effort = f64::INFINITY;
         self.gripper_command(handle, true, effort)

@@ -130,6 +130,15 @@ pub enum WorldError {
 }
 
 /// Result alias for world operations.
+///
+/// ```
+/// # use hearth_sim::world::{WorldConfig, WorldResult};
+/// fn check(config: &WorldConfig) -> WorldResult<f64> {
+///     config.validate()?;
+///     Ok(config.control_dt())
+/// }
+/// assert!(check(&WorldConfig::default()).is_ok());
+/// ```
 pub type WorldResult<T> = Result<T, WorldError>;
 
 /// Checks that `value` is finite, naming it in the error.

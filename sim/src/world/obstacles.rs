@@ -75,6 +75,20 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`] for a handle that names no model.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::planning::obstacles::Obstacles;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// # use parry3d::{math::Pose, shape::Ball};
+    /// let mut world = World::new(WorldConfig { ground_plane: false, ..WorldConfig::default() })?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let probe = (Ball::new(0.05), Pose::translation(0.0, 0.0, 0.1));
+    /// assert!(world.obstacles_view(&[])?.intersects(&probe.0, &probe.1));
+    /// assert!(!world.obstacles_view(&[arm])?.intersects(&probe.0, &probe.1));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn obstacles_view(&self, exclude: &[ModelHandle]) -> WorldResult<WorldObstacles> {
         let mut excluded = Vec::new();
         for &m in exclude {
@@ -96,6 +110,17 @@ impl World {
 
 impl WorldObstacles {
     /// Also ignores these bodies (e.g. the object held by the gripper).
+    ///
+    /// ```
+    /// # use hearth_sim::planning::obstacles::Obstacles;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use parry3d::{math::Pose, shape::Ball};
+    /// let mut world = World::new(WorldConfig { ground_plane: false, ..WorldConfig::default() })?;
+    /// let held = world.add_box("mug", [0.05; 3], &nalgebra::Isometry3::translation(0.0, 0.0, 1.0), true)?;
+    /// let view = world.obstacles_view(&[])?.excluding_bodies(&[held]);
+    /// assert!(!view.intersects(&Ball::new(0.02), &Pose::translation(0.0, 0.0, 1.0)));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn excluding_bodies(mut self, bodies: &[BodyId]) -> Self {
         self.excluded.extend(bodies.iter().map(|b| b.0.into_raw_parts()));
         self.excluded.sort_unstable();
@@ -104,6 +129,13 @@ impl WorldObstacles {
     }
 
     /// Sets the collision margin. Negative or non-finite values count as 0.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert_eq!(world.obstacles_view(&[]).unwrap().with_margin(0.02).margin(), 0.02);
+    /// assert_eq!(world.obstacles_view(&[]).unwrap().with_margin(-1.0).margin(), 0.0);
+    /// ```
     pub fn with_margin(mut self, margin: Real) -> Self {
         self.margin = if margin.is_finite() && margin > 0.0 {
             margin
@@ -114,6 +146,12 @@ impl WorldObstacles {
     }
 
     /// The collision margin applied by `intersects` / `first_hit`.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert_eq!(world.obstacles_view(&[]).unwrap().margin(), 0.0);
+    /// ```
     pub fn margin(&self) -> Real {
         self.margin
     }

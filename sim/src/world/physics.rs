@@ -29,11 +29,25 @@ pub struct BodyId(pub(crate) RigidBodyHandle);
 
 impl BodyId {
     /// The rapier handle.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// let ground = world.ground().unwrap();
+    /// assert!(world.bodies().get(ground.handle()).unwrap().is_fixed());
+    /// ```
     pub fn handle(self) -> RigidBodyHandle {
         self.0
     }
 
     /// Wraps a rapier handle.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{BodyId, World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// let ground = world.ground().unwrap();
+    /// assert_eq!(BodyId::from_handle(ground.handle()), ground);
+    /// ```
     pub fn from_handle(handle: RigidBodyHandle) -> Self {
         Self(handle)
     }
@@ -144,6 +158,13 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::InvalidConfig`] when the configuration does not validate.
+    ///
+    /// ```
+    /// use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert_eq!(world.body_count(), 1); // the ground
+    /// assert!(World::new(WorldConfig { substeps: 0, ..WorldConfig::default() }).is_err());
+    /// ```
     pub fn new(config: WorldConfig) -> WorldResult<Self> {
         config.validate()?;
         let params = IntegrationParameters {
@@ -196,52 +217,126 @@ impl World {
     }
 
     /// The configuration the world was built with.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig { substeps: 2, ..WorldConfig::default() }).unwrap();
+    /// assert_eq!(world.config().substeps, 2);
+    /// ```
     pub fn config(&self) -> &WorldConfig {
         &self.config
     }
 
     /// Simulated time in seconds.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.step();
+    /// assert!((world.time() - world.config().control_dt()).abs() < 1e-12);
+    /// ```
     pub fn time(&self) -> f64 {
         self.state.time
     }
 
     /// Physics steps run so far.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.step();
+    /// world.step_physics();
+    /// assert_eq!(world.physics_steps(), 5); // 4 substeps + 1
+    /// ```
     pub fn physics_steps(&self) -> u64 {
         self.state.physics_steps
     }
 
     /// Number of rigid bodies (ground included).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// assert_eq!(world.body_count(), 2);
+    /// ```
     pub fn body_count(&self) -> usize {
         self.state.bodies.len()
     }
 
     /// Number of colliders.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// assert_eq!(world.collider_count(), 2); // ground and crate
+    /// ```
     pub fn collider_count(&self) -> usize {
         self.state.colliders.len()
     }
 
     /// The ground body, if the world has one.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert!(world.ground().is_some());
+    /// let bare = World::new(WorldConfig { ground_plane: false, ..WorldConfig::default() }).unwrap();
+    /// assert!(bare.ground().is_none());
+    /// ```
     pub fn ground(&self) -> Option<BodyId> {
         self.state.ground.map(BodyId)
     }
 
     /// Read access to rapier's bodies (for renderers and tools).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert_eq!(world.bodies().len(), world.body_count());
+    /// ```
     pub fn bodies(&self) -> &RigidBodySet {
         &self.state.bodies
     }
 
     /// Read access to rapier's colliders.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert_eq!(world.colliders().len(), world.collider_count());
+    /// ```
     pub fn colliders(&self) -> &ColliderSet {
         &self.state.colliders
     }
 
     /// Read access to rapier's narrow phase (contact graph).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// world.step();
+    /// assert!(world.narrow_phase().contact_pairs().any(|pair| pair.has_any_active_contact()));
+    /// ```
     pub fn narrow_phase(&self) -> &NarrowPhase {
         &self.state.narrow_phase
     }
 
     /// The name given to a body (`ground`, `MODEL/LINK`, or the name passed to
     /// [`World::add_box`]).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let b = world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// assert_eq!(world.body_name(b), Some("crate"));
+    /// ```
     pub fn body_name(&self, body: BodyId) -> Option<&str> {
         let rb = self.state.bodies.get(body.0)?;
         self.state.names.get(rb.user_data as usize).map(String::as_str)
@@ -270,6 +365,15 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownBody`].
+    ///
+    /// ```
+    /// # use hearth_sim::assets::Material;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let ground = world.ground().unwrap();
+    /// world.set_body_material(ground, Material::Stone).unwrap();
+    /// assert_eq!(world.body_material(ground), Some(Material::Stone));
+    /// ```
     pub fn set_body_material(&mut self, body: BodyId, material: Material) -> WorldResult<()> {
         let index = self.rigid_body(body)?.user_data as usize;
         if let Some(slot) = Arc::make_mut(&mut self.state.body_materials).get_mut(index) {
@@ -300,6 +404,13 @@ impl World {
     }
 
     /// Replaces the lights.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.set_lights(Vec::new());
+    /// assert!(world.lights().is_empty());
+    /// ```
     pub fn set_lights(&mut self, lights: Vec<Light>) {
         self.state.lights = Arc::new(lights);
     }
@@ -309,6 +420,13 @@ impl World {
     }
 
     /// One control step: `config.substeps` physics steps.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.step();
+    /// assert_eq!(world.physics_steps(), u64::from(world.config().substeps));
+    /// ```
     pub fn step(&mut self) {
         for _ in 0..self.config.substeps {
             self.step_physics();
@@ -316,6 +434,13 @@ impl World {
     }
 
     /// One physics step of `config.timestep` seconds (controllers are applied first).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.step_physics();
+    /// assert!((world.time() - world.config().timestep).abs() < 1e-12);
+    /// ```
     pub fn step_physics(&mut self) {
         self.apply_controllers();
         let s = &mut self.state;
@@ -344,6 +469,16 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::NonFinite`] / [`WorldError::OutOfRange`] for bad sizes or poses.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let shelf = world.add_box("shelf", [0.3, 0.2, 0.02], &Isometry3::translation(0.0, 0.0, 1.0), false).unwrap();
+    /// world.step();
+    /// assert_eq!(world.body_pose(shelf).unwrap().translation.z, 1.0); // fixed: it does not fall
+    /// assert!(world.add_box("bad", [0.0; 3], &Isometry3::identity(), true).is_err());
+    /// ```
     pub fn add_box(&mut self, name: &str, half: [f64; 3], pose: &Isometry3<f64>, dynamic: bool) -> WorldResult<BodyId> {
         for (i, h) in half.iter().enumerate() {
             super::error::check_range("box half extent", ["x", "y", "z"][i], *h, 1e-6, 1e6)?;
@@ -366,6 +501,15 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownBody`].
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let b = world.add_box("crate", [0.1; 3], &Isometry3::translation(1.0, 2.0, 0.1), true).unwrap();
+    /// let pose = world.body_pose(b).unwrap();
+    /// assert!((pose.translation.x - 1.0).abs() < 1e-6 && (pose.translation.y - 2.0).abs() < 1e-6);
+    /// ```
     pub fn body_pose(&self, body: BodyId) -> WorldResult<Isometry3<f64>> {
         self.rigid_body(body).map(|rb| from_pose(rb.position()))
     }
@@ -375,6 +519,15 @@ impl World {
     ///
     /// # Errors
     /// Unknown body or a non-finite pose.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let b = world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.1), true).unwrap();
+    /// world.set_body_pose(b, &Isometry3::translation(0.5, 0.0, 0.1)).unwrap();
+    /// assert!((world.body_pose(b).unwrap().translation.x - 0.5).abs() < 1e-6);
+    /// ```
     pub fn set_body_pose(&mut self, body: BodyId, pose: &Isometry3<f64>) -> WorldResult<()> {
         check_pose("body pose", "body", pose)?;
         self.rigid_body(body)?;

@@ -86,6 +86,18 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let q = world.joint_positions(arm)?;
+    /// assert_eq!(q.len(), panda.dof());
+    /// assert!(q.iter().zip(panda.neutral_configuration()).all(|(a, b)| (a - b).abs() < 1e-5));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_positions(&self, handle: ModelHandle) -> WorldResult<Vec<f64>> {
         let mut q = vec![0.0; self.entry(handle)?.model.dof()];
         self.joint_positions_into(handle, &mut q)?;
@@ -96,6 +108,19 @@ impl World {
     ///
     /// # Errors
     /// Unknown model; `out` of the wrong length.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let mut q = vec![0.0; panda.dof()];
+    /// world.joint_positions_into(arm, &mut q)?;
+    /// assert_eq!(q, world.joint_positions(arm)?);
+    /// assert!(world.joint_positions_into(arm, &mut [0.0; 2]).is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_positions_into(&self, handle: ModelHandle, out: &mut [f64]) -> WorldResult<()> {
         self.read_joints(handle, out, |_, link, axis| f64::from(link.joint().coords()[axis]))
     }
@@ -104,6 +129,16 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// assert!(world.joint_velocities(arm)?.iter().all(|v| *v == 0.0));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_velocities(&self, handle: ModelHandle) -> WorldResult<Vec<f64>> {
         let mut v = vec![0.0; self.entry(handle)?.model.dof()];
         self.joint_velocities_into(handle, &mut v)?;
@@ -114,6 +149,18 @@ impl World {
     ///
     /// # Errors
     /// Unknown model; `out` of the wrong length.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let mut v = vec![f64::NAN; panda.dof()];
+    /// world.joint_velocities_into(arm, &mut v)?;
+    /// assert!(v.iter().all(|x| x.is_finite()));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_velocities_into(&self, handle: ModelHandle, out: &mut [f64]) -> WorldResult<()> {
         self.read_joints(handle, out, |mb, link, _| {
             mb.generalized_velocity()
@@ -128,6 +175,19 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{JointCommand, SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.set_joint_command(arm, "panda_joint1", JointCommand::Effort { value: 2.0 })?;
+    /// world.set_joint_command(arm, "panda_joint2", JointCommand::Off)?;
+    /// let tau = world.joint_efforts(arm)?;
+    /// assert_eq!((tau[0], tau[1]), (2.0, 0.0));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn joint_efforts(&self, handle: ModelHandle) -> WorldResult<Vec<f64>> {
         let entry = self.entry(handle)?;
         let q = self.joint_positions(handle)?;
@@ -171,6 +231,18 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &Isometry3::translation(1.0, 0.5, 0.0), SpawnOptions::fixed())?;
+    /// let t = world.base_pose(arm)?.translation;
+    /// assert!((t.x - 1.0).abs() < 1e-6 && (t.y - 0.5).abs() < 1e-6);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn base_pose(&self, handle: ModelHandle) -> WorldResult<Isometry3<f64>> {
         let entry = self.entry(handle)?;
         let root = entry.model.root();
@@ -181,6 +253,18 @@ impl World {
     ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let bot = RobotModel::builtin("turtlebot").unwrap();
+    /// let h = world.spawn_model(&bot, &nalgebra::Isometry3::translation(0.0, 0.0, 1.0), SpawnOptions::free())?;
+    /// world.step(); // 1/30 s of free fall
+    /// let v = world.base_twist(h)?.linear.z;
+    /// assert!((v + 9.81 / 30.0).abs() < 0.05, "{v}");
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn base_twist(&self, handle: ModelHandle) -> WorldResult<Twist> {
         let entry = self.entry(handle)?;
         let Some(rb) = self.state.bodies.get(entry.root) else {

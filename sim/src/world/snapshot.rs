@@ -41,6 +41,13 @@ impl std::fmt::Debug for Snapshot {
 
 impl Snapshot {
     /// Simulated time at which the snapshot was taken.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.step();
+    /// assert_eq!(world.snapshot().time(), world.time());
+    /// ```
     pub fn time(&self) -> f64 {
         self.state.time
     }
@@ -48,6 +55,15 @@ impl Snapshot {
 
 impl World {
     /// Copies the full state.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let snap = world.snapshot();
+    /// world.step();
+    /// world.restore(&snap).unwrap();
+    /// assert_eq!(world.physics_steps(), 0);
+    /// ```
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
             state: self.state.clone(),
@@ -60,6 +76,17 @@ impl World {
     /// # Errors
     /// [`WorldError::SnapshotMismatch`] when the snapshot comes from a world with a different
     /// timestep; the world is unchanged.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let snap = world.snapshot();
+    /// let mut other = World::new(WorldConfig { timestep: 1.0 / 240.0, ..WorldConfig::default() }).unwrap();
+    /// assert!(other.restore(&snap).is_err());
+    /// world.step();
+    /// world.restore(&snap).unwrap();
+    /// assert_eq!(world.time(), 0.0);
+    /// ```
     pub fn restore(&mut self, snapshot: &Snapshot) -> WorldResult<()> {
         if snapshot.timestep_bits != self.config.timestep.to_bits() {
             return Err(WorldError::SnapshotMismatch {
@@ -77,6 +104,16 @@ impl World {
     /// joint's coordinates and velocities (f32 bit patterns), and the step count.
     ///
     /// Equal hashes mean (up to hash collisions) bit-identical states.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// world.add_box("crate", [0.1; 3], &Isometry3::translation(0.0, 0.0, 0.5), true).unwrap();
+    /// let before = world.state_hash();
+    /// world.step();
+    /// assert_ne!(world.state_hash(), before);
+    /// ```
     pub fn state_hash(&self) -> u64 {
         let mut h = StateHasher::new();
         let s = &self.state;

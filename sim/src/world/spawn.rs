@@ -30,11 +30,26 @@ pub struct ModelHandle(pub(crate) u32);
 
 impl ModelHandle {
     /// The handle's index (models are numbered in spawn order).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// let mut world = World::new(WorldConfig::default()).unwrap();
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), Default::default()).unwrap();
+    /// assert_eq!(arm.index(), 0); // the first model spawned
+    /// ```
     pub fn index(self) -> usize {
         self.0 as usize
     }
 
     /// A handle from an index (it may not name a live model).
+    ///
+    /// ```
+    /// # use hearth_sim::world::{ModelHandle, World, WorldConfig};
+    /// let world = World::new(WorldConfig::default()).unwrap();
+    /// assert!(world.model(ModelHandle::from_index(5)).is_err()); // names no live model
+    /// ```
     pub fn from_index(index: usize) -> Self {
         Self(index as u32)
     }
@@ -47,6 +62,12 @@ impl fmt::Display for ModelHandle {
 }
 
 /// How the root link of a model moves.
+///
+/// ```
+/// use hearth_sim::world::{BaseMode, SpawnOptions};
+/// assert_eq!(BaseMode::default(), BaseMode::Free);
+/// assert_eq!(SpawnOptions::fixed().base, BaseMode::Fixed);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BaseMode {
     /// Welded to the world (arms on a table, furniture, buildings).
@@ -89,6 +110,13 @@ pub struct SpawnOptions {
 
 impl SpawnOptions {
     /// Options for a fixed-base model.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{BaseMode, SpawnOptions};
+    /// let opts = SpawnOptions::fixed();
+    /// assert_eq!(opts.base, BaseMode::Fixed);
+    /// assert!(opts.configuration.is_none());
+    /// ```
     pub fn fixed() -> Self {
         Self {
             base: BaseMode::Fixed,
@@ -97,6 +125,11 @@ impl SpawnOptions {
     }
 
     /// Options for a free-floating model.
+    ///
+    /// ```
+    /// # use hearth_sim::world::{BaseMode, SpawnOptions};
+    /// assert_eq!(SpawnOptions::free().base, BaseMode::Free);
+    /// ```
     pub fn free() -> Self {
         Self::default()
     }
@@ -622,6 +655,16 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// assert_eq!(world.model(arm)?.dof(), panda.dof());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn model(&self, handle: ModelHandle) -> WorldResult<&RobotModel> {
         self.entry(handle).map(|e| &e.model)
     }
@@ -630,11 +673,32 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let opts = SpawnOptions { name: Some("left_arm".into()), ..SpawnOptions::fixed() };
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), opts)?;
+    /// assert_eq!(world.model_name(arm)?, "left_arm");
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn model_name(&self, handle: ModelHandle) -> WorldResult<&str> {
         self.entry(handle).map(|e| e.name.as_str())
     }
 
     /// Handles of every spawned model, in spawn order.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// assert_eq!(world.models().collect::<Vec<_>>(), [arm]);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn models(&self) -> impl Iterator<Item = ModelHandle> + '_ {
         (0..self.state.models.len()).map(ModelHandle::from_index)
     }
@@ -663,6 +727,18 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownModel`].
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let bodies = world.model_bodies(arm)?;
+    /// assert!(bodies.len() > 1 && bodies.len() <= panda.links().len());
+    /// assert!(bodies.contains(&world.link_body(arm, "panda_link0")?));
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn model_bodies(&self, handle: ModelHandle) -> WorldResult<Vec<BodyId>> {
         Ok(self.entry(handle)?.bodies.iter().map(|&h| BodyId(h)).collect())
     }
@@ -671,6 +747,18 @@ impl World {
     ///
     /// # Errors
     /// Unknown model or link.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// let hand = world.link_body(arm, "panda_hand")?;
+    /// assert_eq!(hand, world.link_body(arm, "panda_link7")?); // welded links share a body
+    /// assert!(world.link_body(arm, "no_such_link").is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn link_body(&self, handle: ModelHandle, link: &str) -> WorldResult<BodyId> {
         let entry = self.entry(handle)?;
         let l = link_index(entry, link)?;
@@ -681,6 +769,18 @@ impl World {
     ///
     /// # Errors
     /// Unknown model, non-finite pose.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.place(arm, &Isometry3::translation(0.0, 1.0, 0.0))?;
+    /// assert!((world.base_pose(arm)?.translation.y - 1.0).abs() < 1e-6);
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn place(&mut self, handle: ModelHandle, pose: &Isometry3<f64>) -> WorldResult<()> {
         let entry = self.entry(handle)?;
         check_pose("place pose", &entry.name, pose)?;
@@ -747,6 +847,18 @@ impl World {
     ///
     /// # Errors
     /// [`WorldError::UnknownConfiguration`] when the model has no such configuration.
+    ///
+    /// ```
+    /// # use hearth_sim::kinematics::RobotModel;
+    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// let mut world = World::new(WorldConfig::default())?;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let arm = world.spawn_model(&panda, &nalgebra::Isometry3::identity(), SpawnOptions::fixed())?;
+    /// world.set_named_configuration(arm, "ready")?;
+    /// assert!((world.joint_positions(arm)?[3] + 2.356).abs() < 1e-3);
+    /// assert!(world.set_named_configuration(arm, "dance").is_err());
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
     pub fn set_named_configuration(&mut self, handle: ModelHandle, name: &str) -> WorldResult<()> {
         let entry = self.entry(handle)?;
         let values = named_configuration(entry.model.name(), name).ok_or_else(|| WorldError::UnknownConfiguration {

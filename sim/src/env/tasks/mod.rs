@@ -59,6 +59,12 @@ pub struct Metrics {
 }
 
 /// Why an episode ended.
+///
+/// ```
+/// use hearth_sim::env::{Ending, Info};
+/// let info = Info { ending: Some(Ending::Timeout), ..Info::default() };
+/// assert_ne!(info.ending, Some(Ending::Success));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Ending {

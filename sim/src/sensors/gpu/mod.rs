@@ -418,6 +418,21 @@ fn shadow_transform(
 
 impl GpuCamera {
     /// Colour of background pixels (sRGB bytes): a neutral light-blue sky.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
+    /// let [r, g, b] = GpuCamera::SKY_RGB;
+    /// assert!(r < g && g < b); // a light blue
+    /// if hearth_sim::sensors::gpu_adapter().is_err() {
+    ///     return; // the rest needs a graphics adapter
+    /// }
+    /// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+    /// let mut cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+    /// let mut frame = Frame::default();
+    /// let rgb = ModalitySet::EMPTY.with(Modality::Rgb);
+    /// cam.render(&[], &nalgebra::Isometry3::identity(), rgb, &mut frame).unwrap(); // an empty scene
+    /// assert!(frame.rgb.chunks(3).all(|c| c.iter().zip(GpuCamera::SKY_RGB).all(|(&a, b)| a.abs_diff(b) <= 2)));
+    /// ```
     pub const SKY_RGB: [u8; 3] = [180, 200, 225];
 
     /// Uploads the scene (tessellated once) and prepares rendering at `intrinsics` with
@@ -630,11 +645,31 @@ impl GpuCamera {
     }
 
     /// Name of the adapter rendering (e.g. `llvmpipe (LLVM 19.1.7, 256 bits)`).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
+    /// if hearth_sim::sensors::gpu_adapter().is_err() {
+    ///     return; // no graphics adapter here
+    /// }
+    /// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+    /// let mut cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+    /// assert_eq!(cam.adapter_name(), hearth_sim::sensors::gpu_adapter().unwrap());
+    /// ```
     pub fn adapter_name(&self) -> &str {
         &self.gpu.name
     }
 
     /// The intrinsics this camera renders with.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
+    /// if hearth_sim::sensors::gpu_adapter().is_err() {
+    ///     return; // no graphics adapter here
+    /// }
+    /// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+    /// let mut cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+    /// assert_eq!(cam.intrinsics(), &k);
+    /// ```
     pub fn intrinsics(&self) -> &CameraIntrinsics {
         &self.intrinsics
     }
@@ -670,6 +705,22 @@ impl GpuCamera {
     }
 
     /// Forgets the previous frame: the next frame's flows are 0.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
+    /// if hearth_sim::sensors::gpu_adapter().is_err() {
+    ///     return; // no graphics adapter here
+    /// }
+    /// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+    /// let mut cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+    /// use nalgebra::Isometry3;
+    /// let flow = ModalitySet::EMPTY.with(Modality::SceneFlow);
+    /// let mut frame = Frame::default();
+    /// cam.render(&[], &Isometry3::identity(), flow, &mut frame).unwrap();
+    /// cam.reset_flow();
+    /// cam.render(&[], &Isometry3::translation(0.5, 0.0, 0.0), flow, &mut frame).unwrap();
+    /// assert!(frame.scene_flow.iter().all(|f| *f == [0.0; 3]));
+    /// ```
     pub fn reset_flow(&mut self) {
         self.prev_camera = None;
     }
@@ -682,6 +733,23 @@ impl GpuCamera {
     /// # Errors
     /// [`SensorError::InvalidParameter`] when `item_poses` does not have one pose per item or
     /// the camera pose is not finite; [`SensorError::Gpu`] when the device fails.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
+    /// if hearth_sim::sensors::gpu_adapter().is_err() {
+    ///     return; // no graphics adapter here
+    /// }
+    /// let k = CameraIntrinsics::new(8, 6, 60.0).unwrap();
+    /// let mut cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
+    /// use nalgebra::Isometry3;
+    /// let mut frame = Frame::default();
+    /// let depth = ModalitySet::EMPTY.with(Modality::Depth);
+    /// cam.render(&[], &Isometry3::identity(), depth, &mut frame).unwrap();
+    /// assert_eq!(frame.depth.len(), 8 * 6);
+    /// assert!(frame.depth.iter().all(|&d| d == 0.0)); // nothing to see
+    /// let one_pose_too_many = [Isometry3::identity()];
+    /// assert!(cam.render(&one_pose_too_many, &Isometry3::identity(), depth, &mut frame).is_err());
+    /// ```
     pub fn render(
         &mut self,
         item_poses: &[Isometry3<f64>],

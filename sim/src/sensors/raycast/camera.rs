@@ -70,6 +70,13 @@ impl RaycastCamera {
     ///
     /// # Errors
     /// [`SensorError::InvalidResolution`] / [`SensorError::InvalidParameter`] for bad intrinsics.
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{CameraIntrinsics, Preset, RaycastCamera, RenderOptions, VisualScene};
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// let camera = RaycastCamera::new(&VisualScene::default(), k, RenderOptions::from(Preset::VisualRl)).unwrap();
+    /// assert_eq!(camera.intrinsics(), &k);
+    /// ```
     pub fn new(scene: &VisualScene, intrinsics: CameraIntrinsics, options: RenderOptions) -> SensorResult<Self> {
         intrinsics.validate()?;
         let (w, h) = (intrinsics.width, intrinsics.height);
@@ -94,6 +101,19 @@ impl RaycastCamera {
     }
 
     /// The intrinsics.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, Preset, RaycastCamera, RenderOptions, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// let mut camera = RaycastCamera::new(&scene, k, RenderOptions::from(Preset::VisualRl)).unwrap();
+    /// assert_eq!(camera.intrinsics().pixels(), 32 * 24);
+    /// ```
     pub fn intrinsics(&self) -> &CameraIntrinsics {
         &self.intrinsics
     }
@@ -102,6 +122,28 @@ impl RaycastCamera {
     ///
     /// # Errors
     /// [`SensorError::InvalidParameter`] for an item index out of range.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, Preset, RaycastCamera, RenderOptions, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// let mut camera = RaycastCamera::new(&scene, k, RenderOptions::from(Preset::VisualRl)).unwrap();
+    /// use hearth_sim::sensors::PbrMaterial;
+    /// let rgb = ModalitySet::EMPTY.with(Modality::Rgb);
+    /// let (mut before, mut after) = (Frame::default(), Frame::default());
+    /// camera.render(&scene.world_poses(&world), &pose, rgb, &mut before).unwrap();
+    /// let red = PbrMaterial { base_color: [1.0, 0.0, 0.0, 1.0], ..scene.items[1].material };
+    /// camera.set_material(1, red).unwrap(); // the crate
+    /// camera.render(&scene.world_poses(&world), &pose, rgb, &mut after).unwrap();
+    /// let i = 3 * after.index(16, 12);
+    /// assert!(after.rgb[i] > after.rgb[i + 1] && before.rgb[i..i + 3] != after.rgb[i..i + 3]);
+    /// assert!(camera.set_material(2, red).is_err()); // two items only
+    /// ```
     pub fn set_material(&mut self, item: usize, material: PbrMaterial) -> SensorResult<()> {
         let n = self.materials.len();
         let slot = self.materials.get_mut(item).ok_or(SensorError::InvalidParameter {
@@ -118,6 +160,26 @@ impl RaycastCamera {
     }
 
     /// Forgets the previous frame: the next flows are 0.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, Preset, RaycastCamera, RenderOptions, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// let mut camera = RaycastCamera::new(&scene, k, RenderOptions::from(Preset::VisualRl)).unwrap();
+    /// let flow = ModalitySet::EMPTY.with(Modality::OpticalFlow);
+    /// let mut frame = Frame::default();
+    /// let poses = scene.world_poses(&world);
+    /// camera.render(&poses, &pose, flow, &mut frame).unwrap();
+    /// let moved = Isometry3::translation(0.0, 0.3, 0.0) * pose;
+    /// camera.reset_flow();
+    /// camera.render(&poses, &moved, flow, &mut frame).unwrap();
+    /// assert!(frame.optical_flow.iter().all(|f| *f == [0.0; 2])); // no previous frame
+    /// ```
     pub fn reset_flow(&mut self) {
         self.prev_camera = None;
     }
@@ -128,6 +190,24 @@ impl RaycastCamera {
     /// # Errors
     /// [`SensorError::InvalidParameter`] when `item_poses` has the wrong length or `camera` is
     /// not finite.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{CameraIntrinsics, Frame, Modality, ModalitySet, Mount, Preset, RaycastCamera, RenderOptions, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::{Isometry3, Point3};
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # world.add_box("crate", [0.5; 3], &Isometry3::translation(3.0, 0.0, 0.5), false).unwrap();
+    /// # let scene = VisualScene::from_world(&world);
+    /// # let Mount::Free(pose) = Mount::look_at(Point3::new(0.0, 0.0, 0.5), Point3::new(3.0, 0.0, 0.5)).unwrap() else { unreachable!() };
+    /// let k = CameraIntrinsics::new(32, 24, 60.0).unwrap();
+    /// let mut camera = RaycastCamera::new(&scene, k, RenderOptions::from(Preset::VisualRl)).unwrap();
+    /// let mut frame = Frame::default();
+    /// let set = ModalitySet::EMPTY.with(Modality::Depth).with(Modality::Seg);
+    /// camera.render(&scene.world_poses(&world), &pose, set, &mut frame).unwrap();
+    /// assert!((frame.depth[frame.index(16, 12)] - 2.5).abs() < 1e-3);
+    /// assert_eq!(frame.seg[frame.index(16, 12)], scene.items[1].semantic);
+    /// assert!(camera.render(&[], &pose, set, &mut frame).is_err()); // one pose per item needed
+    /// ```
     pub fn render(
         &mut self,
         item_poses: &[Isometry3<f64>],

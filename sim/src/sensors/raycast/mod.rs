@@ -22,6 +22,22 @@ mod camera;
 pub use camera::RaycastCamera;
 
 /// A ray's first hit.
+///
+/// ```
+/// # use hearth_sim::sensors::{RayScene, VisualScene};
+/// # use hearth_sim::world::{World, WorldConfig};
+/// # use nalgebra::Isometry3;
+/// # use parry3d::math::Vector;
+/// # let mut world = World::new(WorldConfig::default()).unwrap();
+/// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+/// # let visuals = VisualScene::from_world(&world);
+/// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+/// let mut rays = RayScene::new(&visuals);
+/// rays.update(&visuals, &world);
+/// let hit = rays.cast(Vector::new(0.0, 0.0, 0.5), Vector::new(1.0, 0.0, 0.0), 10.0).unwrap();
+/// assert_eq!(hit.item, 1);
+/// assert!((hit.toi - 2.9).abs() < 1e-4 && (hit.normal.x + 1.0).abs() < 1e-4);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayHit {
     /// Distance along the (unit) ray, m.
@@ -235,6 +251,12 @@ fn world_bounds(local: &Bounds, pose: &Pose) -> Bounds {
 
 impl RayScene {
     /// Shapes for every item of `scene` (call [`RayScene::update`] before casting).
+    ///
+    /// ```
+    /// use hearth_sim::sensors::{RayScene, VisualScene};
+    /// let rays = RayScene::new(&VisualScene::default());
+    /// assert!(rays.is_empty());
+    /// ```
     pub fn new(scene: &VisualScene) -> Self {
         let prims: Vec<Prim> = scene.items.iter().map(|i| Prim::of(&i.shape)).collect();
         let n = prims.len();
@@ -254,17 +276,63 @@ impl RayScene {
     }
 
     /// Number of shapes.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// assert_eq!(rays.len(), visuals.items.len());
+    /// assert_eq!(rays.len(), 2);
+    /// ```
     pub fn len(&self) -> usize {
         self.prims.len()
     }
 
     /// Whether the scene has no shapes.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// assert!(!rays.is_empty());
+    /// ```
     pub fn is_empty(&self) -> bool {
         self.prims.is_empty()
     }
 
     /// Reads every shape's pose from `world` (the previous poses are kept for flow) and brings
     /// the BVHs up to date. `scene` must be the one this was built from.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// world.set_body_pose(wall, &Isometry3::translation(5.0, 0.0, 1.0)).unwrap();
+    /// rays.update(&visuals, &world);
+    /// let hit = rays.cast(Vector::new(0.0, 0.0, 0.5), Vector::X, 10.0).unwrap();
+    /// assert!((hit.toi - 4.9).abs() < 1e-4);
+    /// ```
     pub fn update(&mut self, scene: &VisualScene, world: &World) {
         let mut item_poses = std::mem::take(&mut self.item_poses);
         scene.world_poses_into(world, &mut item_poses);
@@ -273,6 +341,24 @@ impl RayScene {
     }
 
     /// [`RayScene::update`] from item world poses (one per item).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// let mut poses = visuals.world_poses(&world);
+    /// poses[1] = Isometry3::translation(1.0, 0.0, 1.0);
+    /// rays.update_from_poses(&poses);
+    /// let hit = rays.cast(Vector::new(0.0, 0.0, 0.5), Vector::X, 10.0).unwrap();
+    /// assert!((hit.toi - 0.9).abs() < 1e-4);
+    /// ```
     pub fn update_from_poses(&mut self, item_poses: &[nalgebra::Isometry3<f64>]) {
         let first = self.updates == 0;
         self.updates += 1;
@@ -306,17 +392,66 @@ impl RayScene {
     }
 
     /// World pose of item `item`'s shape now.
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// assert!((rays.pose(1).translation.x - 3.0).abs() < 1e-6);
+    /// ```
     pub fn pose(&self, item: u32) -> &Pose {
         &self.poses[item as usize]
     }
 
     /// World pose of item `item`'s shape at the previous update (the current pose on the first).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// let mut poses = visuals.world_poses(&world);
+    /// poses[1] = Isometry3::translation(4.0, 0.0, 1.0);
+    /// rays.update_from_poses(&poses);
+    /// assert!((rays.prev_pose(1).translation.x - 3.0).abs() < 1e-6);
+    /// assert!((rays.pose(1).translation.x - 4.0).abs() < 1e-6);
+    /// ```
     pub fn prev_pose(&self, item: u32) -> &Pose {
         &self.prev_poses[item as usize]
     }
 
     /// First hit of the ray from `origin` along the unit vector `dir` within `max_toi`.
     /// Shapes that contain the origin are not seen (as back faces are culled by a rasteriser).
+    ///
+    /// ```
+    /// # use hearth_sim::sensors::{RayScene, VisualScene};
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use nalgebra::Isometry3;
+    /// # use parry3d::math::Vector;
+    /// # let mut world = World::new(WorldConfig::default()).unwrap();
+    /// # let wall = world.add_box("wall", [0.1, 2.0, 1.0], &Isometry3::translation(3.0, 0.0, 1.0), true).unwrap();
+    /// # let visuals = VisualScene::from_world(&world);
+    /// // `rays` holds the ground (item 0) and a wall (item 1) whose face is 2.9 m ahead.
+    /// let mut rays = RayScene::new(&visuals);
+    /// rays.update(&visuals, &world);
+    /// let origin = Vector::new(0.0, 0.0, 0.5);
+    /// assert!(rays.cast(origin, Vector::X, 2.0).is_none()); // the wall is beyond 2 m
+    /// assert!(rays.cast(origin, Vector::NEG_X, 10.0).is_none()); // nothing behind
+    /// assert_eq!(rays.cast(origin, Vector::NEG_Z, 10.0).unwrap().item, 0); // the ground below
+    /// ```
     pub fn cast(&self, origin: Vector, dir: Vector, max_toi: Real) -> Option<RayHit> {
         let inv = Vector::ONE / dir;
         let mut best: Option<(f32, u32)> = None;
