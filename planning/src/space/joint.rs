@@ -349,7 +349,7 @@ impl Space for JointSpace {
     }
 
     fn euclidean_weights(&self) -> Option<&[f64]> {
-        (!self.continuous.contains(&true)).then_some(&self.weights[..])
+        (!self.any_continuous).then_some(&self.weights[..])
     }
 
     fn wrapping_weights(&self) -> Option<(&[f64], &[bool])> {
