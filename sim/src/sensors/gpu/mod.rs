@@ -334,20 +334,22 @@ fn srgb_to_linear(c: f64) -> f64 {
     }
 }
 
+/// An IEEE half-precision float (as read back from an `Rgba16Float` target) widened to f32,
+/// exactly, by moving its bits: a read-back 512² normal image converts 786,432 of them.
 fn f16_to_f32(h: u16) -> f32 {
-    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
-    let exp = ((h >> 10) & 0x1f) as i32;
-    let man = (h & 0x3ff) as f32;
+    let sign = u32::from(h & 0x8000) << 16;
+    let exp = u32::from((h >> 10) & 0x1f);
+    let man = u32::from(h & 0x3ff);
     match exp {
-        0 => sign * man * (2.0f32).powi(-24),
-        31 => {
-            if man == 0.0 {
-                sign * f32::INFINITY
-            } else {
-                f32::NAN
-            }
+        // Zero and subnormals: man × 2⁻²⁴, exact in f32.
+        0 => {
+            let v = man as f32 * (1.0 / 16_777_216.0);
+            if sign == 0 { v } else { -v }
         }
-        _ => sign * (1.0 + man / 1024.0) * (2.0f32).powi(exp - 15),
+        // Infinity and NaN keep their payload.
+        31 => f32::from_bits(sign | 0x7f80_0000 | (man << 13)),
+        // Normal numbers: rebias the exponent from 15 to 127.
+        _ => f32::from_bits(sign | ((exp + 112) << 23) | (man << 13)),
     }
 }
 
@@ -1364,6 +1366,31 @@ mod tests {
         assert_eq!(f16_to_f32(0x3800), 0.5);
         assert!((f16_to_f32(0x3bff) - 0.99951).abs() < 1e-4);
         assert_eq!(f16_to_f32(0x0001), 2.0f32.powi(-24));
+    }
+
+    /// Every one of the 65,536 half floats decodes to the value its fields define.
+    #[test]
+    fn half_floats_decode_exactly() {
+        for h in 0..=u16::MAX {
+            let negative = h & 0x8000 != 0;
+            let (exp, man) = (i32::from((h >> 10) & 0x1f), f64::from(h & 0x3ff));
+            let magnitude = match exp {
+                0 => man * 2f64.powi(-24),
+                31 if man == 0.0 => f64::INFINITY,
+                31 => f64::NAN,
+                _ => (1.0 + man / 1024.0) * 2f64.powi(exp - 15),
+            };
+            let got = f16_to_f32(h);
+            if magnitude.is_nan() {
+                assert!(got.is_nan(), "{h:#06x}");
+            } else {
+                assert_eq!(
+                    got.to_bits(),
+                    ((if negative { -magnitude } else { magnitude }) as f32).to_bits(),
+                    "{h:#06x}"
+                );
+            }
+        }
     }
 
     #[test]
