@@ -229,6 +229,9 @@ impl SelfCollisionMatrix {
 
     /// Whether the pair is skipped.
     ///
+    /// An index that is not a link of the matrix's model (`>= links().len()`) is never part of
+    /// a disabled pair: the answer is then `false`, even for `a == b`.
+    ///
     /// ```
     /// use hearth_kinematics::{RobotModel, SelfCollisionMatrix};
     /// let panda = RobotModel::builtin("panda").unwrap();
@@ -236,12 +239,16 @@ impl SelfCollisionMatrix {
     /// let (l0, l1) = (panda.link_index("panda_link0").unwrap(), panda.link_index("panda_link1").unwrap());
     /// assert!(m.is_disabled(l0, l1) && m.is_disabled(l1, l0));
     /// assert!(m.is_disabled(l0, l0)); // a link never collides with itself
+    /// let n = panda.links().len();
+    /// assert!(!m.is_disabled(l0, n) && !m.is_disabled(n, n)); // not a link
     /// ```
     pub fn is_disabled(&self, a: usize, b: usize) -> bool {
-        a == b || self.disabled.get(a * self.n + b).is_some_and(Option::is_some)
+        // One comparison bounds both indices, so `a * n + b` cannot reach another pair's entry.
+        a.max(b) < self.n && (a == b || self.disabled.get(a * self.n + b).is_some_and(Option::is_some))
     }
 
-    /// Why the pair is skipped, if it is.
+    /// Why the pair is skipped, if it is; `None` when either index is not a link of the
+    /// matrix's model.
     ///
     /// ```
     /// use hearth_kinematics::{DisabledReason, RobotModel, SelfCollisionMatrix};
@@ -251,8 +258,12 @@ impl SelfCollisionMatrix {
     /// assert_eq!(m.reason(l0, l6), None);
     /// m.disable(l0, l6, DisabledReason::Never);
     /// assert_eq!(m.reason(l6, l0), Some(DisabledReason::Never));
+    /// assert_eq!(m.reason(l0, panda.links().len()), None); // not a link
     /// ```
     pub fn reason(&self, a: usize, b: usize) -> Option<DisabledReason> {
+        if a.max(b) >= self.n {
+            return None;
+        }
         self.disabled.get(a * self.n + b).copied().flatten()
     }
 
@@ -291,6 +302,9 @@ impl SelfCollisionMatrix {
 
     /// Marks a pair as never checked (e.g. from a benchmark's allowed-collision list).
     ///
+    /// A no-op when `a == b` (a link is never checked against itself) or when either index is
+    /// not a link of the matrix's model.
+    ///
     /// ```
     /// use hearth_kinematics::{DisabledReason, RobotModel, SelfCollisionMatrix};
     /// let panda = RobotModel::builtin("panda").unwrap();
@@ -300,6 +314,9 @@ impl SelfCollisionMatrix {
     /// m.disable(l0, l6, DisabledReason::Never);
     /// assert!(m.is_disabled(l0, l6));
     /// assert_eq!(m.checked_pairs().len(), before - 1);
+    /// let unchanged = m.clone();
+    /// m.disable(l0, panda.links().len(), DisabledReason::Never); // not a link: no-op
+    /// assert_eq!(m, unchanged);
     /// ```
     pub fn disable(&mut self, a: usize, b: usize, why: DisabledReason) {
         if a < self.n && b < self.n && a != b {
@@ -472,4 +489,35 @@ pub fn links_touch(model: &RobotModel, poses: &[Isometry3<f64>], a: usize, b: us
     parry3d::query::intersection_test(&pa, sa.shape.as_ref(), &pb, sb.shape.as_ref())
         .map(|r| r.intersecting)
         .unwrap_or(false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{DisabledReason, SelfCollisionMatrix};
+    use crate::RobotModel;
+
+    /// An index past the last link reads no other pair's entry: `a * n + b` with `b >= n` used
+    /// to land in row `a + 1`.
+    #[test]
+    fn out_of_range_link_indices_are_never_disabled() {
+        let panda = RobotModel::builtin("panda").unwrap();
+        let m = SelfCollisionMatrix::adjacent_only(&panda);
+        let n = panda.links().len();
+        // Some `(a, b)` whose aliased entry `(a + 1, b - n)` is disabled (every link and its
+        // parent are adjacent, so there is one).
+        let (a, b) = (0..n - 1)
+            .flat_map(|a| (n..2 * n).map(move |b| (a, b)))
+            .find(|&(a, b)| m.is_disabled(a + 1, b - n) && a + 1 != b - n)
+            .expect("an aliased disabled pair");
+        assert!(!m.is_disabled(a, b), "({a}, {b}) read another pair's entry");
+        assert!(!m.is_disabled(b, a));
+        assert_eq!(m.reason(a, b), None);
+        assert!(!m.is_disabled(n, n) && !m.is_disabled(usize::MAX, usize::MAX));
+        assert!(!m.is_disabled(usize::MAX, 0) && !m.is_disabled(0, usize::MAX));
+        assert_eq!(m.reason(usize::MAX, 1), None);
+        let mut d = m.clone();
+        d.disable(a, b, DisabledReason::Never);
+        d.disable(usize::MAX, 0, DisabledReason::Never);
+        assert_eq!(d, m);
+    }
 }

@@ -9,6 +9,7 @@ use rapier3d::prelude::*;
 
 use super::error::{WorldError, WorldResult, check_finite, check_len, check_range};
 use super::physics::World;
+use super::readout::Twist;
 use super::spawn::{BaseMode, ModelEntry, ModelHandle};
 
 /// What drives one joint.
@@ -898,7 +899,7 @@ impl World {
             self.keep_driven_joints_awake(i);
         }
         let s = &mut self.state;
-        for entry in &s.models {
+        for entry in &mut s.models {
             if entry.has_effort {
                 apply_efforts(entry, Arc::make_mut(&mut s.bodies));
             }
@@ -911,11 +912,18 @@ impl World {
                 let dt = self.params.dt;
                 let pose = *rb.position();
                 let world_v = pose.rotation * Vector::new(vx as Real, vy as Real, 0.0);
+                let world_w = Vector::new(0.0, 0.0, omega as Real);
                 let turn = Rotation::from_rotation_z(omega as Real * dt);
                 let next = Pose::from_parts(pose.translation + world_v * dt, (turn * pose.rotation).normalize());
                 rb.set_position(next, true);
                 rb.set_linvel(world_v, true);
-                rb.set_angvel(Vector::new(0.0, 0.0, omega as Real), true);
+                rb.set_angvel(world_w, true);
+                // The body reads zero velocity again after the step: keep the twist the base
+                // moves with this step (its origin moves by `world_v * dt`) for `base_twist`.
+                entry.holonomic_twist = Twist {
+                    linear: ::nalgebra::Vector3::new(world_v.x.into(), world_v.y.into(), world_v.z.into()),
+                    angular: ::nalgebra::Vector3::new(0.0, 0.0, world_w.z.into()),
+                };
             }
         }
     }

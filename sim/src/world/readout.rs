@@ -8,7 +8,7 @@ use rapier3d::prelude::*;
 use super::control::JointCommand;
 use super::error::{WorldResult, check_len};
 use super::physics::{BodyId, World};
-use super::spawn::{ModelEntry, ModelHandle, link_index};
+use super::spawn::{BaseMode, ModelEntry, ModelHandle, link_index};
 
 /// Linear and angular velocity of a body, in the world frame.
 ///
@@ -251,22 +251,39 @@ impl World {
 
     /// Velocity of the model's root body.
     ///
+    /// A [`BaseMode::Holonomic`] base is moved by setting its pose each physics step, so its
+    /// body holds no velocity between steps: for it this is the twist it was moved with in
+    /// the last physics step, i.e. the [`World::drive_holonomic`] command in the world frame
+    /// (its pose change over that step divided by the timestep). It is zero before the first
+    /// driven step and after [`World::place`] or a configuration reset, until the next step.
+    ///
     /// # Errors
     /// [`super::WorldError::UnknownModel`].
     ///
     /// ```
     /// # use hearth_sim::kinematics::RobotModel;
-    /// # use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+    /// # use hearth_sim::world::{BaseMode, SpawnOptions, World, WorldConfig};
     /// let mut world = World::new(WorldConfig::default())?;
     /// let bot = RobotModel::builtin("turtlebot").unwrap();
     /// let h = world.spawn_model(&bot, &nalgebra::Isometry3::translation(0.0, 0.0, 1.0), SpawnOptions::free())?;
     /// world.step(); // 1/30 s of free fall
     /// let v = world.base_twist(h)?.linear.z;
     /// assert!((v + 9.81 / 30.0).abs() < 0.05, "{v}");
+    ///
+    /// // A holonomic base reads the twist it is driven with.
+    /// let opts = SpawnOptions { base: BaseMode::Holonomic, ..SpawnOptions::default() };
+    /// let hb = world.spawn_model(&bot, &nalgebra::Isometry3::translation(2.0, 0.0, 0.01), opts)?;
+    /// world.drive_holonomic(hb, 0.4, 0.0, 0.2)?;
+    /// world.step();
+    /// let t = world.base_twist(hb)?;
+    /// assert!((t.linear.norm() - 0.4).abs() < 1e-4 && (t.angular.z - 0.2).abs() < 1e-6, "{t:?}");
     /// # Ok::<(), hearth_sim::world::WorldError>(())
     /// ```
     pub fn base_twist(&self, handle: ModelHandle) -> WorldResult<Twist> {
         let entry = self.entry(handle)?;
+        if entry.base == BaseMode::Holonomic {
+            return Ok(entry.holonomic_twist);
+        }
         let Some(rb) = self.state.bodies.get(entry.root) else {
             return Ok(Twist::default());
         };
@@ -424,4 +441,52 @@ fn link_world_pose(world: &World, entry: &ModelEntry, link: usize) -> Isometry3<
         .bodies
         .get(body)
         .map_or_else(Isometry3::identity, |rb| from_pose(&(*rb.position() * offset)))
+}
+
+#[cfg(test)]
+mod tests {
+    use ::nalgebra::{Isometry3, Vector3};
+    use hearth_kinematics::RobotModel;
+
+    use crate::world::{BaseMode, SpawnOptions, World, WorldConfig};
+
+    /// A holonomic base is moved by setting its pose each physics step; its twist is the one
+    /// it is driven with (in the world frame), not zero.
+    #[test]
+    fn holonomic_base_twist_is_the_driven_twist() {
+        let mut world = World::new(WorldConfig::default()).unwrap();
+        let bot = RobotModel::builtin("turtlebot").unwrap();
+        let opts = SpawnOptions {
+            base: BaseMode::Holonomic,
+            ..SpawnOptions::default()
+        };
+        // Facing +y, so the base's +x is the world's +y.
+        let start = Isometry3::new(
+            Vector3::new(0.0, 0.0, 0.02),
+            Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+        );
+        let h = world.spawn_model(&bot, &start, opts).unwrap();
+        world.drive_holonomic(h, 0.3, -0.1, 0.0).unwrap();
+        for _ in 0..10 {
+            world.step();
+        }
+        let before = world.base_pose(h).unwrap().translation.vector;
+        world.step_physics();
+        let t = world.base_twist(h).unwrap();
+        let expected = Vector3::new(0.1, 0.3, 0.0);
+        assert!((t.linear - expected).norm() < 1e-3, "{t:?}");
+        assert!(t.angular.norm() < 1e-3, "{t:?}");
+        // The base actually moves with it: its pose change over the step over the timestep.
+        let moved = (world.base_pose(h).unwrap().translation.vector - before) / world.config().timestep;
+        assert!((moved - t.linear).norm() < 1e-2, "{moved:?} vs {t:?}");
+        // Turning in place: the yaw rate, and no linear speed at the base's origin.
+        world.drive_holonomic(h, 0.0, 0.0, 0.5).unwrap();
+        world.step();
+        let t = world.base_twist(h).unwrap();
+        assert!((t.angular - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-3, "{t:?}");
+        assert!(t.linear.norm() < 1e-3, "{t:?}");
+        // Placing the base zeroes its velocities until the next step, as for other bases.
+        world.place(h, &start).unwrap();
+        assert_eq!(world.base_twist(h).unwrap(), Default::default());
+    }
 }

@@ -17,6 +17,7 @@ use super::control::{
 };
 use super::error::{WorldError, WorldResult, check_len};
 use super::physics::{BodyId, World, check_pose};
+use super::readout::Twist;
 
 /// A model (robot or object) spawned in a [`World`].
 ///
@@ -181,6 +182,9 @@ pub(crate) struct ModelEntry {
     /// Per configuration variable: controller gains.
     pub(crate) gains: Vec<JointGains>,
     pub(crate) drive: Option<BaseDrive>,
+    /// The world twist a holonomic base was moved with in the last physics step (zero until
+    /// it is first driven, and after its velocities are zeroed); see [`World::base_twist`].
+    pub(crate) holonomic_twist: Twist,
     pub(crate) diff_drive: Option<DiffDrive>,
     pub(crate) gripper: Option<Gripper>,
     /// Whether any variable is in effort mode (forces must be re-applied every step).
@@ -523,6 +527,7 @@ impl World {
             commands: vec![JointCommand::Off; dof],
             gains: Vec::new(),
             drive: None,
+            holonomic_twist: Twist::default(),
             diff_drive,
             gripper,
             has_effort: false,
@@ -906,6 +911,7 @@ impl World {
             rb.set_linvel(Vector::ZERO, true);
             rb.set_angvel(Vector::ZERO, true);
         }
+        self.state.models[handle.index()].holonomic_twist = Twist::default();
         let s = &mut self.state;
         if let Some(link) = s.multibody_joints.rigid_body_link(root).copied()
             && let Some(mb) = s.multibody_joints.get_multibody_mut(link.multibody)

@@ -443,24 +443,27 @@ impl GpuCamera {
     /// # Errors
     /// [`SensorError::NoAdapter`] when no adapter exists; [`SensorError::InvalidResolution`] or
     /// [`SensorError::InvalidParameter`] for bad intrinsics (or an image larger than the
-    /// device allows), or an `msaa` other than 0, 1 or 4; [`SensorError::Gpu`] when the device
-    /// refuses the scene. Never panics.
+    /// device allows), or an `msaa` other than 1 (off) or 4 (checked before any adapter is
+    /// requested); [`SensorError::Gpu`] when the device refuses the scene. Never panics.
     ///
     /// ```
     /// use hearth_sim::sensors::{CameraIntrinsics, GpuCamera, RenderOptions, SensorError, VisualScene};
+    /// let k = CameraIntrinsics::new(32, 32, 60.0).unwrap();
+    /// for msaa in [0, 3] {
+    ///     // Refused without an adapter, too.
+    ///     let bad = RenderOptions { msaa, ..RenderOptions::default() };
+    ///     let err = GpuCamera::new(&VisualScene::default(), k, bad).unwrap_err();
+    ///     assert!(matches!(err, SensorError::InvalidParameter { name: "msaa", .. }));
+    /// }
     /// if hearth_sim::sensors::gpu_adapter().is_err() {
     ///     return;
     /// }
-    /// let k = CameraIntrinsics::new(32, 32, 60.0).unwrap();
     /// let cam = GpuCamera::new(&VisualScene::default(), k, RenderOptions::default()).unwrap();
     /// assert_eq!(cam.intrinsics().width, 32);
-    /// let bad = RenderOptions { msaa: 3, ..RenderOptions::default() };
-    /// let err = GpuCamera::new(&VisualScene::default(), k, bad).unwrap_err();
-    /// assert!(matches!(err, SensorError::InvalidParameter { .. }));
     /// ```
     pub fn new(scene: &VisualScene, intrinsics: CameraIntrinsics, options: RenderOptions) -> SensorResult<Self> {
         intrinsics.validate()?;
-        if !matches!(options.msaa, 0 | 1 | 4) {
+        if !matches!(options.msaa, 1 | 4) {
             return Err(SensorError::InvalidParameter {
                 name: "msaa",
                 value: options.msaa as f64,
@@ -1402,5 +1405,23 @@ mod tests {
         let d = Vector3::new(0.3, 0.4, -1.0).normalize();
         let far = l * (c + d * 2.0).push(1.0);
         assert!((far.z - 1.0).abs() < 1e-12);
+    }
+
+    /// Sample counts other than 1 and 4 are refused as a bad setting before any adapter is
+    /// requested (so without a GPU, too); 0 used to pass and render single-sampled.
+    #[test]
+    fn unsupported_msaa_counts_are_invalid_parameters() {
+        let k = CameraIntrinsics::new(16, 16, 60.0).unwrap();
+        for msaa in [0, 2, 3, 8, 16, u32::MAX] {
+            let options = RenderOptions {
+                msaa,
+                ..RenderOptions::default()
+            };
+            let err = GpuCamera::new(&VisualScene::default(), k, options).err();
+            assert!(
+                matches!(err, Some(SensorError::InvalidParameter { name: "msaa", .. })),
+                "msaa {msaa}: {err:?}"
+            );
+        }
     }
 }
