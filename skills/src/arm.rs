@@ -454,7 +454,9 @@ impl Arm {
             },
         );
         let space = JointSpace::from_chain(&chain).map_err(|e| SkillError::BadInput(e.to_string()))?;
-        let limits = Limits::for_chain(&chain).scaled(settings.velocity_scale, settings.velocity_scale);
+        let limits = Limits::for_chain(&chain)
+            .scaled(settings.velocity_scale, settings.velocity_scale)
+            .map_err(|e| SkillError::BadInput(e.to_string()))?;
         Ok(Self {
             robot,
             chain,

@@ -67,11 +67,14 @@ pub enum IkMethod {
     Qp,
 }
 
-/// IK settings. `Default` gives 1 mm / 0.01 rad tolerances.
+/// IK settings. `Default` gives 1 mm / 0.01 rad tolerances and no wall-clock limit: a default
+/// solve stops after `max_attempts` restarts (200), so its answer is the same on every machine
+/// for the same seed.
 ///
 /// ```
 /// let s = hearth_kinematics::IkSettings { max_attempts: 10, ..Default::default() };
 /// assert_eq!(s.position_tolerance, 1e-3);
+/// assert_eq!(s.time_limit, None); // reproducible by default
 /// ```
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
@@ -108,7 +111,7 @@ impl Default for IkSettings {
             orientation_tolerance: 1e-2,
             max_iterations: 60,
             max_attempts: 200,
-            time_limit: Some(Duration::from_millis(50)),
+            time_limit: None,
             damping: 1e-2,
             max_step: 1.0,
             candidates: 1,

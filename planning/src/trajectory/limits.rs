@@ -230,28 +230,38 @@ impl Limits {
         }
     }
 
-    /// Velocity and acceleration scaled by `velocity_scale` and `acceleration_scale` (each in
-    /// `(0, 1]`; other values leave the limit unchanged), like MoveIt's scaling factors. Jerk and
-    /// position bounds stay as they are.
+    /// Velocity and acceleration scaled by `velocity_scale` and `acceleration_scale`, like
+    /// MoveIt's scaling factors. Jerk and position bounds stay as they are.
+    ///
+    /// # Errors
+    ///
+    /// [`TrajectoryError::BadScale`] when a factor is not in `(0, 1]` (NaN included).
     ///
     /// ```
-    /// use hearth_planning::trajectory::Limits;
+    /// use hearth_planning::trajectory::{Limits, TrajectoryError};
     ///
     /// let limits = Limits::new(vec![2.0], vec![4.0], vec![100.0])?;
-    /// let slow = limits.scaled(0.5, 0.25);
+    /// let slow = limits.scaled(0.5, 0.25)?;
     /// assert_eq!((slow.velocity(), slow.acceleration(), slow.jerk()), (&[1.0][..], &[1.0][..], &[100.0][..]));
-    /// // Out of range: unchanged.
-    /// assert_eq!(limits.scaled(2.0, 0.0), limits);
-    /// # Ok::<(), hearth_planning::trajectory::TrajectoryError>(())
+    /// assert!(matches!(limits.scaled(2.0, 0.5), Err(TrajectoryError::BadScale { what: "velocity_scale", .. })));
+    /// assert!(matches!(limits.scaled(1.0, f64::NAN), Err(TrajectoryError::BadScale { what: "acceleration_scale", .. })));
+    /// # Ok::<(), TrajectoryError>(())
     /// ```
-    pub fn scaled(&self, velocity_scale: f64, acceleration_scale: f64) -> Self {
-        let s = |x: f64| if x > 0.0 && x <= 1.0 { x } else { 1.0 };
-        Self {
-            velocity: self.velocity.iter().map(|v| v * s(velocity_scale)).collect(),
-            acceleration: self.acceleration.iter().map(|a| a * s(acceleration_scale)).collect(),
+    pub fn scaled(&self, velocity_scale: f64, acceleration_scale: f64) -> Result<Self, TrajectoryError> {
+        for (what, value) in [
+            ("velocity_scale", velocity_scale),
+            ("acceleration_scale", acceleration_scale),
+        ] {
+            if !(value > 0.0 && value <= 1.0) {
+                return Err(TrajectoryError::BadScale { what, value });
+            }
+        }
+        Ok(Self {
+            velocity: self.velocity.iter().map(|v| v * velocity_scale).collect(),
+            acceleration: self.acceleration.iter().map(|a| a * acceleration_scale).collect(),
             jerk: self.jerk.clone(),
             bounds: self.bounds.clone(),
-        }
+        })
     }
 
     /// Number of coordinates.

@@ -127,6 +127,14 @@ pub enum TrajectoryError {
         /// Its velocity at the start of the second.
         v_start: f64,
     },
+    /// A scaling factor outside `(0, 1]` (or NaN).
+    #[error("{what} is {value}; it must be in (0, 1]")]
+    BadScale {
+        /// Which factor (`velocity_scale`, `acceleration_scale`).
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// The trajectory generator found no motion.
     #[error("the trajectory generator failed: {0}")]
     Generator(String),
