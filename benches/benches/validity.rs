@@ -1,5 +1,6 @@
 //! The single-configuration check (FK + every link against the obstacles + self-collision),
-//! the hot loop of every planner, on a MotionBenchMaker Panda problem.
+//! the hot loop of every planner, on a MotionBenchMaker Panda problem, and for the Fetch's arm
+//! over a table in the simulator, through the live world's view and through its scene copy.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -57,5 +58,79 @@ fn state_validity(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, state_validity);
+/// The Fetch's torso and arm over a table in a world: random configurations checked against
+/// `World::obstacles_view` (rapier's query pipeline) and against its `to_scene` copy.
+fn world_validity(c: &mut Criterion) {
+    use hearth_sim::assets::{Asset, Category};
+    use hearth_sim::scene::{SceneFile, SceneObject};
+    use hearth_sim::world::{SpawnOptions, World, WorldConfig};
+
+    let table = Asset::build(Category::Table, 0, 1.0).expect("a table");
+    let mut scene = SceneFile::empty("table in front of a fetch");
+    scene
+        .objects
+        .push(SceneObject::new("table", "table", 0, [1.05, 0.0, 0.0]));
+    for (name, y) in [("bowl", -0.25), ("mug", 0.0)] {
+        let mut o = SceneObject::new(name, name, 0, [0.85, y, table.aabb_max[2]]);
+        o.on = Some("table".into());
+        scene.objects.push(o);
+    }
+    let mut world = World::new(WorldConfig::default()).expect("a world");
+    world.load_scene(&scene).expect("the scene loads");
+    let fetch = RobotModel::builtin("fetch").unwrap();
+    let robot = world
+        .spawn_model(
+            &fetch,
+            &nalgebra::Isometry3::translation(0.0, 0.0, 0.02),
+            SpawnOptions::fixed(),
+        )
+        .expect("the fetch spawns");
+    world.tuck(robot).expect("tucked");
+    world.settle(60);
+    let chain = Chain::named(&fetch, "arm_with_torso").unwrap();
+    let acm = SelfCollisionMatrix::compute(
+        &fetch,
+        &SelfCollisionSettings {
+            samples: 500,
+            ..Default::default()
+        },
+    );
+    // 1 cm of margin: the base stands 2 cm above the floor, which stays in the view.
+    let view = world.obstacles_view(&[robot]).expect("a view").with_margin(0.01);
+    let full = world.joint_positions(robot).expect("joint positions");
+    let base = world.base_pose(robot).expect("a base pose");
+    let make = |obstacles: Arc<dyn hearth_planning::obstacles::Obstacles>| {
+        let mut v = RobotValidity::new(chain.clone(), acm.clone(), obstacles);
+        v.set_reference(&full).expect("a reference");
+        v.set_base(base);
+        v
+    };
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    let qs: Vec<Vec<f64>> = (0..256)
+        .map(|_| {
+            let mut q = vec![0.0; chain.dof()];
+            chain.random_configuration(&mut rng, &mut q);
+            q
+        })
+        .collect();
+    // Neither trivially clear nor trivially blocked (a view that kept the floor within the
+    // margin would reject every state at the base).
+    let valid = qs.iter().filter(|q| make(Arc::new(view.clone())).is_valid(q)).count();
+    assert!((26..230).contains(&valid), "{valid} of 256 states valid");
+    for (name, mut v) in [
+        ("state_validity/fetch_table_world_view", make(Arc::new(view.clone()))),
+        ("state_validity/fetch_table_scene_copy", make(Arc::new(view.to_scene()))),
+    ] {
+        let mut k = 0;
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                k = (k + 1) & 255;
+                black_box(v.is_valid(black_box(&qs[k])))
+            })
+        });
+    }
+    c.bench_function("world/to_scene_fetch_table", |b| b.iter(|| black_box(view.to_scene())));
+}
+
+criterion_group!(benches, state_validity, world_validity);
 criterion_main!(benches);

@@ -164,3 +164,124 @@ fn birrt_plan_in_the_live_world_executes_without_contact() {
         assert!(moved < 0.01, "`{}` moved {moved:.3} m", world.model_name(m).unwrap());
     }
 }
+
+/// `WorldObstacles::to_scene` answers as the live view does: the same probes touch the same
+/// named obstacles (compound furniture is split into its parts, each at its world pose), and a
+/// Fetch arm validator gives the same verdict on random configurations through either.
+#[test]
+fn scene_copy_of_the_view_agrees_with_the_live_view() {
+    use hearth_sim::planning::obstacles::Obstacles;
+    use parry3d::math::{Pose, Vector};
+    use parry3d::shape::{Ball, Cuboid, Cylinder, Shape};
+    use rand::RngExt;
+
+    let (world, robot, _, top) = table_scene();
+    let model = world.model(robot).unwrap().clone();
+    let chain = Chain::named(&model, "arm_with_torso").unwrap();
+    let matrix = SelfCollisionMatrix::compute(
+        &model,
+        &SelfCollisionSettings {
+            samples: 300,
+            ..Default::default()
+        },
+    );
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+    for margin in [0.0, 0.01] {
+        let view = world.obstacles_view(&[robot]).unwrap().with_margin(margin);
+        let scene = view.to_scene();
+        assert_eq!(scene.margin(), margin);
+        // The table's compound comes apart into its parts, each named after the table.
+        let table_parts = scene.obstacles().iter().filter(|o| o.name.contains("table")).count();
+        assert!(table_parts > 1, "{table_parts} table obstacles");
+        let shapes: [Box<dyn Shape>; 3] = [
+            Box::new(Ball::new(0.04)),
+            Box::new(Cuboid::new(Vector::new(0.05, 0.02, 0.08))),
+            Box::new(Cylinder::new(0.06, 0.03)),
+        ];
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..3000 {
+            let shape = &shapes[i % 3];
+            let at = Vector::new(
+                rng.random_range(0.4..1.6) as f32,
+                rng.random_range(-0.6..0.6) as f32,
+                rng.random_range(0.0..top + 0.3) as f32,
+            );
+            let turn = Vector::new(
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+            );
+            let pose = Pose::new(at, turn);
+            let live = view
+                .first_hit(shape.as_ref(), &pose)
+                .map(|id| view.name(id).unwrap().to_owned());
+            let copy = scene
+                .first_hit(shape.as_ref(), &pose)
+                .map(|id| scene.name(id).unwrap().to_owned());
+            assert_eq!(
+                live.is_some(),
+                copy.is_some(),
+                "probe {i} at {at:?}: {live:?} against {copy:?}"
+            );
+            if live.is_some() {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+            assert_eq!(view.ball_hits(at, 0.04), scene.ball_hits(at, 0.04), "ball at {at:?}");
+        }
+        assert!(hits > 300 && misses > 300, "{hits} hits, {misses} misses");
+        let make = |o: Arc<dyn Obstacles>| {
+            let mut v = RobotValidity::new(chain.clone(), matrix.clone(), o);
+            v.set_reference(&world.joint_positions(robot).unwrap()).unwrap();
+            v.set_base(world.base_pose(robot).unwrap());
+            v
+        };
+        let (mut live, mut copy) = (make(Arc::new(view.clone())), make(Arc::new(scene)));
+        let mut q = vec![0.0; chain.dof()];
+        let (mut valid, mut differ) = (0, 0);
+        for _ in 0..2000 {
+            chain.random_configuration(&mut rng, &mut q);
+            let verdict = live.is_valid(&q);
+            if verdict != copy.is_valid(&q) {
+                // Only at contact, where parry's tests of the whole compound and of its part
+                // may round differently: some link is within a millimetre (past the margin).
+                let gap = nearest_gap(&world, robot, &chain, &view, &q);
+                assert!(
+                    gap < margin + 1e-3,
+                    "margin {margin}: {q:?} disagree {gap} m from contact"
+                );
+                differ += 1;
+            }
+            valid += verdict as usize;
+        }
+        assert!(valid > 200 && valid < 1900, "{valid} of 2000 valid");
+        assert!(differ <= 5, "{differ} of 2000 verdicts differ");
+    }
+}
+
+/// The smallest distance from a link of the robot at chain configuration `q` to the
+/// obstacles of `view` (up to 5 cm).
+fn nearest_gap(
+    world: &World,
+    robot: ModelHandle,
+    chain: &Chain,
+    view: &hearth_sim::world::WorldObstacles,
+    q: &[f64],
+) -> f32 {
+    use hearth_sim::planning::obstacles::Obstacles;
+    let model = chain.model();
+    let mut full = world.joint_positions(robot).unwrap();
+    chain.scatter(q, &mut full);
+    let mut poses = vec![Isometry3::identity(); model.links().len()];
+    model
+        .fk_from(&world.base_pose(robot).unwrap(), &full, &mut poses)
+        .unwrap();
+    (0..model.links().len())
+        .filter_map(|l| {
+            let shape = model.link_shape(l)?;
+            let pose = hearth_sim::kinematics::to_pose(&(poses[l] * shape.origin));
+            view.distance(shape.shape.as_ref(), &pose, 0.05).map(|(d, _)| d)
+        })
+        .fold(f32::INFINITY, f32::min)
+}

@@ -662,7 +662,8 @@ impl Arm {
             .obstacles_view(&[self.robot])?
             .excluding_bodies(&skip)
             .with_margin(margin);
-        self.checker(world, Arc::new(view))
+        // A static copy of the view answers the same, faster (see `WorldObstacles::to_scene`).
+        self.checker(world, Arc::new(view.to_scene()))
     }
 
     fn checker(

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use hearth_planning::obstacles::{ObstacleId, Obstacles, nearest_leaf};
+use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene, nearest_leaf};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher, Ray};
@@ -143,6 +143,50 @@ impl WorldObstacles {
             0.0
         };
         self
+    }
+
+    /// The view's obstacles copied into a static [`ParryScene`]: the same colliders at their
+    /// poses now (shapes shared, not copied), compound shapes split into their parts, each
+    /// named after its collider, and the same margin. It answers as the view does, faster for
+    /// planning: a robot's ball broad phase and the exact tests of its links meet the parts
+    /// one by one through the scene's closed forms (boxes, balls, cylinders, capsules) instead
+    /// of rapier's query pipeline and GJK. A Fetch arm's state checks over a table take about
+    /// half the time. The copy does not follow the world: make a new one after the world moves.
+    ///
+    /// ```
+    /// # use hearth_sim::planning::obstacles::Obstacles;
+    /// # use hearth_sim::world::{World, WorldConfig};
+    /// # use parry3d::{math::Pose, shape::Ball};
+    /// let mut world = World::new(WorldConfig { ground_plane: false, ..WorldConfig::default() })?;
+    /// world.add_box("crate", [0.2; 3], &nalgebra::Isometry3::translation(1.0, 0.0, 0.2), false)?;
+    /// let view = world.obstacles_view(&[])?.with_margin(0.01);
+    /// let scene = view.to_scene();
+    /// assert_eq!((scene.len(), scene.margin()), (1, 0.01));
+    /// for x in [0.5, 0.75, 1.0] {
+    ///     let probe = (Ball::new(0.05), Pose::translation(x, 0.0, 0.2));
+    ///     assert_eq!(scene.intersects(&probe.0, &probe.1), view.intersects(&probe.0, &probe.1));
+    /// }
+    /// # Ok::<(), hearth_sim::world::WorldError>(())
+    /// ```
+    pub fn to_scene(&self) -> ParryScene {
+        let obstacles = self
+            .colliders
+            .iter()
+            .filter(|(_, co)| co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent()))
+            .flat_map(|(_, co)| {
+                let name = self.names.get(co.user_data as usize).cloned().unwrap_or_default();
+                let pose = *co.position();
+                match co.shape().as_compound() {
+                    Some(c) => c
+                        .shapes()
+                        .iter()
+                        .map(|(part_pose, part)| Obstacle::new(name.clone(), part.clone(), pose * *part_pose))
+                        .collect::<Vec<_>>(),
+                    None => vec![Obstacle::new(name, co.shared_shape().clone(), pose)],
+                }
+            })
+            .collect();
+        ParryScene::new(obstacles).with_margin(self.margin)
     }
 
     /// The collision margin applied by `intersects` / `first_hit`.
