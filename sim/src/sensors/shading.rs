@@ -42,7 +42,8 @@ pub const AMBIENT_SKY: [f32; 3] = [1.6, 1.7, 1.9];
 /// assert!((down - Vector::from(AMBIENT_GROUND) / std::f32::consts::PI).length() < 1e-6);
 /// ```
 pub const AMBIENT_GROUND: [f32; 3] = [0.8, 0.75, 0.7];
-/// Colour of the ray-cast camera's pixels that see nothing, as sRGB bytes (a pale sky).
+/// Colour of the pixels that see nothing, as sRGB bytes (a pale blue sky), the same for the
+/// ray-cast camera and the wgpu camera ([`GpuCamera::SKY_RGB`](crate::sensors::GpuCamera::SKY_RGB)).
 ///
 /// ```
 /// use hearth_sim::sensors::shading::BACKGROUND_SRGB;
@@ -54,7 +55,7 @@ pub const AMBIENT_GROUND: [f32; 3] = [0.8, 0.75, 0.7];
 /// camera.render(&[], &nalgebra::Isometry3::identity(), rgb, &mut frame).unwrap(); // an empty scene
 /// assert!(frame.rgb.chunks(3).all(|c| c == BACKGROUND_SRGB));
 /// ```
-pub const BACKGROUND_SRGB: [u8; 3] = [178, 196, 214];
+pub const BACKGROUND_SRGB: [u8; 3] = [180, 200, 225];
 
 /// A light as seen from a surface point: unit direction towards the light and irradiance
 /// (colour × intensity, before the cosine), and the distance to it (∞ for the sun).

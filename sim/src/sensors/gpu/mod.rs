@@ -419,7 +419,8 @@ fn shadow_transform(
 }
 
 impl GpuCamera {
-    /// Colour of background pixels (sRGB bytes): a neutral light-blue sky.
+    /// Colour of background pixels (sRGB bytes): a neutral light-blue sky, the ray-cast
+    /// camera's [`BACKGROUND_SRGB`](crate::sensors::shading::BACKGROUND_SRGB) too.
     ///
     /// ```
     /// use hearth_sim::sensors::{CameraIntrinsics, Frame, GpuCamera, Modality, ModalitySet, RenderOptions, VisualScene};
@@ -435,7 +436,7 @@ impl GpuCamera {
     /// cam.render(&[], &nalgebra::Isometry3::identity(), rgb, &mut frame).unwrap(); // an empty scene
     /// assert!(frame.rgb.chunks(3).all(|c| c.iter().zip(GpuCamera::SKY_RGB).all(|(&a, b)| a.abs_diff(b) <= 2)));
     /// ```
-    pub const SKY_RGB: [u8; 3] = [180, 200, 225];
+    pub const SKY_RGB: [u8; 3] = crate::sensors::shading::BACKGROUND_SRGB;
 
     /// Uploads the scene (tessellated once) and prepares rendering at `intrinsics` with
     /// `options`.
