@@ -201,3 +201,34 @@ fn vectorised_envs_batch_and_auto_reset() {
         "a fresh episode after the auto-reset"
     );
 }
+
+/// Driving straight at the goal never scores a negative shaping reward, the first step
+/// included: the potential is measured from where the robot stands after the reset, the same
+/// way as at every step.
+#[test]
+fn driving_straight_at_the_goal_earns_no_negative_reward() {
+    for robot in ["fetch", "turtlebot"] {
+        let mut config = corridor(&["task_obs"]);
+        config.robot.name = robot.into();
+        let mut env = Env::new(config).unwrap();
+        env.reset(0).unwrap();
+        let rewards: Vec<f64> = (0..12).map(|_| env.step(&[1.0, 0.0]).unwrap().reward).collect();
+        assert!(rewards.iter().all(|&r| r >= 0.0), "{robot}: {rewards:?}");
+        assert!(rewards.iter().sum::<f64>() > 0.0, "{robot}: {rewards:?}");
+    }
+    // A bare hall whose start lies on a cell corner, not a cell centre.
+    let hall = r#"{"name": "hall", "building": {"rooms": [{"name": "hall", "room_type": "corridor",
+        "polygon": [[0, 0], [6, 0], [6, 2], [0, 2]]}]},
+      "robot": {"name": "turtlebot", "position": [1, 1, 0], "yaw": 0}}"#;
+    let path = std::env::temp_dir().join(format!("hearth_first_reward_{}.json", std::process::id()));
+    std::fs::write(&path, hall).unwrap();
+    let toml = "[task]\nname = \"point_nav_fixed\"\nstart = [1, 1, 0]\ngoal = [4, 1]\n[sensors]\nmodalities = [\"task_obs\"]\n";
+    let mut config = EnvConfig::from_toml(toml).unwrap();
+    config.scene.file = Some(path.clone());
+    let mut env = Env::new(config).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    env.reset(0).unwrap();
+    let rewards: Vec<f64> = (0..12).map(|_| env.step(&[1.0, 0.0]).unwrap().reward).collect();
+    assert!(rewards.iter().all(|&r| r >= 0.0), "hall: {rewards:?}");
+    assert!(rewards.iter().sum::<f64>() > 0.0, "hall: {rewards:?}");
+}

@@ -172,7 +172,7 @@ impl WorldObstacles {
         let obstacles = self
             .colliders
             .iter()
-            .filter(|(_, co)| co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent()))
+            .filter(|(_, co)| self.keeps(co))
             .flat_map(|(_, co)| {
                 let name = self.names.get(co.user_data as usize).cloned().unwrap_or_default();
                 let pose = *co.position();
@@ -219,10 +219,15 @@ impl WorldObstacles {
         f(&pipeline)
     }
 
+    /// Whether a collider counts as an obstacle of this view: enabled, solid and not excluded.
+    fn keeps(&self, co: &Collider) -> bool {
+        co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent())
+    }
+
     /// The collider behind a BVH leaf, if it passes the exclusions.
     fn candidate(&self, leaf: u32) -> Option<&Collider> {
         let (co, _) = self.colliders.get_unknown_gen(leaf)?;
-        (co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent())).then_some(co)
+        self.keeps(co).then_some(co)
     }
 
     fn touches(&self, co: &Collider, shape: &dyn Shape, pose: &Pose) -> bool {
@@ -291,7 +296,7 @@ impl Obstacles for WorldObstacles {
     fn aabb(&self) -> Option<Aabb> {
         self.colliders
             .iter()
-            .filter(|(_, co)| co.is_enabled() && !co.is_sensor() && !self.is_excluded(co.parent()))
+            .filter(|(_, co)| self.keeps(co))
             .map(|(_, co)| co.compute_aabb())
             .reduce(|a, b| a.merged(&b))
     }

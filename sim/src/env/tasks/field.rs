@@ -78,6 +78,39 @@ impl DistanceField {
         self.field.get(y as usize * self.width + x as usize).copied()
     }
 
+    /// The distance at world point `xy`, interpolated bilinearly between the centres of the four
+    /// cells around it (cells off the map or unreachable left out, the others' weights scaled
+    /// up); `None` when none of the four has a finite distance. A robot that creeps sideways
+    /// across a cell border sees its potential change by as much as it moved, not by a cell's
+    /// diagonal step.
+    pub(crate) fn interpolated(&self, xy: [f64; 2]) -> Option<f64> {
+        let u = (xy[0] - self.origin[0]) / self.resolution - 0.5;
+        let v = (xy[1] - self.origin[1]) / self.resolution - 0.5;
+        if !(u.is_finite() && v.is_finite()) {
+            return None;
+        }
+        let (i, j) = (u.floor(), v.floor());
+        let (fx, fy) = (u - i, v - j);
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for (di, dj, w) in [
+            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+            (1.0, 0.0, fx * (1.0 - fy)),
+            (0.0, 1.0, (1.0 - fx) * fy),
+            (1.0, 1.0, fx * fy),
+        ] {
+            let (x, y) = (i + di, j + dj);
+            if w <= 0.0 || x < 0.0 || y < 0.0 || x >= self.width as f64 || y >= self.height as f64 {
+                continue;
+            }
+            let d = self.field[y as usize * self.width + x as usize];
+            if d.is_finite() {
+                sum += w * d;
+                weight += w;
+            }
+        }
+        (weight > 1e-9).then(|| sum / weight)
+    }
+
     /// The distance of cell `i`.
     pub(crate) fn cell(&self, i: usize) -> f64 {
         self.field.get(i).copied().unwrap_or(f64::INFINITY)
@@ -117,4 +150,40 @@ pub(crate) fn nearest_free(maps: &SceneMaps, p: [f64; 2], radius: f64) -> Option
         }
     }
     best.map(|(_, i)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DistanceField;
+
+    /// A 3 × 2 field of 1 m cells from the origin; the middle of the top row is unreachable.
+    fn field() -> DistanceField {
+        DistanceField {
+            field: vec![0.0, 1.0, 2.0, 1.0, f64::INFINITY, 3.0],
+            origin: [0.0, 0.0],
+            resolution: 1.0,
+            width: 3,
+            height: 2,
+        }
+    }
+
+    #[test]
+    fn interpolation_meets_the_cells_at_their_centres_and_blends_between() {
+        let f = field();
+        assert_eq!(f.interpolated([0.5, 0.5]), Some(0.0));
+        assert_eq!(f.interpolated([2.5, 1.5]), Some(3.0));
+        assert_eq!(f.interpolated([1.0, 0.5]), Some(0.5)); // half-way along the bottom row
+        assert_eq!(f.interpolated([0.75, 0.5]), Some(0.25));
+        // Between four centres, one unreachable: the three others, their weights scaled up.
+        let d = f.interpolated([1.0, 1.0]).unwrap();
+        assert!((d - (0.0 + 1.0 + 1.0) / 3.0).abs() < 1e-12, "{d}");
+        // At the unreachable cell's centre nothing finite has weight.
+        assert_eq!(f.interpolated([1.5, 1.5]), None);
+        // Beyond the outer centres the border cells hold; off the map entirely, nothing.
+        assert_eq!(f.interpolated([0.1, 0.1]), Some(0.0));
+        assert_eq!(f.interpolated([-3.0, 0.5]), None);
+        assert_eq!(f.interpolated([f64::NAN, 0.5]), None);
+        // The cell lookup, for comparison, jumps at the border.
+        assert_eq!((f.at([0.99, 0.5]), f.at([1.01, 0.5])), (Some(0.0), Some(1.0)));
+    }
 }

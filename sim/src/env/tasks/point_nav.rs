@@ -76,7 +76,7 @@ impl PointNav {
             straight
         } else {
             // Off the traversable map (against a wall) fall back to the straight-line distance.
-            self.field.at(xy).filter(|d| d.is_finite()).unwrap_or(straight)
+            self.field.interpolated(xy).unwrap_or(straight)
         }
     }
 
