@@ -238,6 +238,29 @@ fn holonomic_base_follows_velocity_in_its_frame() {
     steps(&mut world, 30);
     let p = world.base_pose(h).unwrap().translation.vector;
     assert!(p.x.abs() < 0.01 && (p.y - 0.3).abs() < 0.01, "{p:?}");
+    // Its twist is the one it is driven with, in the world frame (the pose is set each
+    // physics step, so the body's own velocity would read zero): base +x is world +y.
+    world.drive_holonomic(h, 0.3, -0.1, 0.0).unwrap();
+    steps(&mut world, 2);
+    let before = world.base_pose(h).unwrap().translation.vector;
+    world.step_physics();
+    let t = world.base_twist(h).unwrap();
+    assert!((t.linear - Vector3::new(0.1, 0.3, 0.0)).norm() < 1e-3, "{t:?}");
+    assert!(t.angular.norm() < 1e-3, "{t:?}");
+    let moved = (world.base_pose(h).unwrap().translation.vector - before) / world.config().timestep;
+    assert!(
+        (moved - t.linear).norm() < 1e-2,
+        "the base moves with it: {moved:?} vs {t:?}"
+    );
+    // Turning in place: the yaw rate, and no linear speed at the base's origin.
+    world.drive_holonomic(h, 0.0, 0.0, 0.5).unwrap();
+    steps(&mut world, 1);
+    let t = world.base_twist(h).unwrap();
+    assert!((t.angular - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-3, "{t:?}");
+    assert!(t.linear.norm() < 1e-3, "{t:?}");
+    // Placing the base zeroes its velocities until the next step, as for other bases.
+    world.place(h, &start).unwrap();
+    assert_eq!(world.base_twist(h).unwrap(), Default::default());
     assert!(matches!(world.drive(h, 0.1, 0.0), Ok(())), "its wheels still spin");
 }
 
