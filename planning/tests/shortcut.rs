@@ -244,19 +244,25 @@ fn repair_bypasses_a_graze_with_one_sideways_waypoint() {
 /// are closer than it is thick).
 struct Band {
     x_max: f64,
+    thickness: f64,
     checks: u64,
 }
 
 impl Band {
     /// Across the left quarter: paths can go around it on the right.
     fn left() -> Self {
-        Self { x_max: 0.25, checks: 0 }
+        Self {
+            x_max: 0.25,
+            thickness: 2e-4,
+            checks: 0,
+        }
     }
 
     /// Across the whole square: every path from bottom to top crosses it.
     fn wall() -> Self {
         Self {
             x_max: f64::INFINITY,
+            thickness: 2e-4,
             checks: 0,
         }
     }
@@ -265,7 +271,7 @@ impl Band {
 impl StateValidator for Band {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
-        !((0.5..=0.5002).contains(&q[1]) && q[0] < self.x_max)
+        !((0.5..=0.5 + self.thickness).contains(&q[1]) && q[0] < self.x_max)
     }
     fn checks(&self) -> u64 {
         self.checks
@@ -327,6 +333,60 @@ fn smoothing_returns_only_motions_that_pass_the_verification_check() {
         "the band never slipped through: the test shows nothing"
     );
     assert_eq!(fell_back, unverified_fails);
+}
+
+/// With a verification check asked for, the first parabolic run checks its ramps at four times
+/// the fine spacing (here capped at the coarse one); a band that slips between those samples is
+/// caught by the verification, and the run is redone at the fine spacing, which cannot miss it.
+#[test]
+fn a_first_run_that_misses_a_band_is_redone_at_the_fine_spacing() {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    let zigzag = Path {
+        states: vec![vec![0.0, 0.0], vec![0.5, 0.5], vec![0.0, 1.0]],
+    };
+    let (fine, attempts) = (0.005, 100);
+    let settings = ShortcutSettings {
+        attempts,
+        fine_resolution: Some(fine),
+        verify_resolution: Some(fine),
+        ..Default::default()
+    };
+    // Thicker than the fine spacing, thinner than the first run's.
+    let band = || Band {
+        thickness: 1.5 * fine,
+        ..Band::left()
+    };
+    let mut redone = 0;
+    for seed in 0..16 {
+        let mut motion = MotionValidator::new(square(), 0.02);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let out = smooth(
+            Smoothing::Parabolic,
+            &mut motion,
+            &mut band(),
+            &zigzag,
+            &limits2(),
+            &settings,
+            std::time::Duration::from_secs(1),
+            &mut rng,
+        )
+        .expect("the zig-zag itself is clear");
+        assert!(
+            out.trajectory.check(&square(), &mut band(), fine).is_ok(),
+            "seed {seed}"
+        );
+        assert!(
+            !out.fell_back,
+            "seed {seed}: a run at the fine spacing cannot miss the band"
+        );
+        if out.parabolic.attempts > attempts as u64 {
+            redone += 1;
+        }
+    }
+    assert!(
+        redone > 0,
+        "no first run slipped through the band: the test shows nothing"
+    );
 }
 
 #[test]
