@@ -646,6 +646,34 @@ proptest! {
         prop_assert!(square().distance(&q, states.last().unwrap()) < 1e-9);
     }
 
+    /// A trajectory's check samples states at most the spacing apart, and not many more than
+    /// its length needs: the time step follows the speed.
+    #[test]
+    fn checks_sample_at_the_spacing_and_not_much_closer(
+        states in prop::collection::vec(prop::collection::vec(0.0f64..1.0, 2), 2..6),
+        v in prop::collection::vec(-0.4f64..0.4, 2),
+        resolution in 0.001f64..0.05,
+    ) {
+        let mut t = Trajectory::rest_to_rest(&square(), &Path { states }, &limits2()).unwrap();
+        // A ramp from the middle of the first edge into one with a moving start as well.
+        let mut q = [0.0; 2];
+        t.sample(0.5 * t.duration(), &mut q, None);
+        let ramp = Trajectory::ramp(&[0.5, 0.5], &v, &q, &[0.0; 2], &limits2().without_jerk()).unwrap();
+        for t in [&mut t, &mut ramp.clone()] {
+            let mut seen = Record::default();
+            t.check(&square(), &mut seen, resolution).unwrap();
+            let path = t.to_path(&square(), resolution);
+            prop_assert_eq!(seen.0.len(), path.states.len());
+            let gaps: Vec<f64> = path.states.windows(2).map(|w| square().distance(&w[0], &w[1])).collect();
+            prop_assert!(gaps.iter().all(|&g| g <= resolution + 1e-12), "{gaps:?}");
+            let length: f64 = gaps.iter().sum();
+            prop_assert!(
+                path.states.len() as f64 <= length / (0.75 * resolution) + 4.0,
+                "{} states for {length} at {resolution}", path.states.len()
+            );
+        }
+    }
+
     #[test]
     fn shortcutting_never_lengthens_or_invalidates(seed in 0u64..1000) {
         let (mut motion, path) = planned(seed % 7);

@@ -829,8 +829,11 @@ impl Trajectory {
 }
 
 /// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
-/// consecutive ones at most `resolution` apart, to `out` (and their times to `times`),
-/// adapting the time step to the local speed.
+/// consecutive ones at most `resolution` apart, to `out` (and their times to `times`). Each
+/// time step is scaled from the last one's measured distance so that states come about 0.96
+/// of `resolution` apart (a step that lands too far is retried shorter in the same way); on
+/// the benchmark's trajectories that takes about a third fewer states than halving and growing
+/// the step by fixed factors.
 fn discretise_timed<S: Space>(
     dim: usize,
     duration: f64,
@@ -857,18 +860,24 @@ fn discretise_timed<S: Space>(
             if d <= resolution || next - t < 1e-9 {
                 break;
             }
-            dt *= 0.5;
+            // Too far: retry at the step the measured speed suggests (`max` before `min` reads
+            // a NaN distance as the smallest factor, so the loop still ends).
+            dt = (next - t) * (0.96 * resolution / d).max(0.1).min(0.9);
             next = t + dt;
         }
         out.extend_from_slice(&q);
         if let Some(times) = times.as_deref_mut() {
             times.push(next);
         }
+        // The next step aims at 0.96 of the spacing, from this step's speed.
+        dt = (next - t)
+            * if d > 0.0 {
+                (0.96 * resolution / d).clamp(0.5, 2.0)
+            } else {
+                2.0
+            };
         t = next;
         std::mem::swap(&mut prev, &mut q);
-        if d < 0.5 * resolution {
-            dt *= 1.5;
-        }
     }
 }
 
