@@ -54,8 +54,8 @@ const PARABOLIC_RETRIES: usize = 2;
 
 /// How many times the fine spacing [`smooth`]'s first parabolic run checks each round's ramps
 /// at, when a verification check follows. Measured on the MBM sets (BiRRT, 100 attempts): the
-/// Panda's post-processing makes 36 % fewer checks at the median (Fetch 34 %), one run in eight
-/// is redone (one in nineteen at the fine spacing), and the motions are as fast.
+/// Panda's post-processing makes 36 % fewer checks at the median (Fetch 34 %), one run in
+/// eight is redone (one in nineteen at the fine spacing), and the motions are as fast.
 const FIRST_RUN_SPACING: f64 = 4.0;
 
 /// Sideways moves [`bypass`] tries before an edge is re-planned.
@@ -147,6 +147,15 @@ pub struct ShortcutStats {
     pub accepted: u64,
     /// Time spent.
     pub time: Duration,
+}
+
+impl ShortcutStats {
+    /// Adds another run's counts and time to these.
+    fn absorb(&mut self, other: &ShortcutStats) {
+        self.attempts += other.attempts;
+        self.accepted += other.accepted;
+        self.time += other.time;
+    }
 }
 
 struct Clock {
@@ -622,15 +631,20 @@ pub struct Smoothed {
 /// shortcutting at the motion validator's resolution (unless `smoothing` is `None`), [`repair`]
 /// of the result at `settings.fine_resolution` (when set, within `repair_budget`), timing
 /// within `limits`, and, for `Parabolic`, acceleration-bounded shortcutting whose ramps are
-/// checked at both resolutions. With `settings.verify_resolution`, the finished trajectory is
-/// checked once more at that resolution, and the first parabolic run, which that check backs,
-/// checks its ramps at four times the fine spacing (at most the motion validator's); when the
-/// shortcut motion fails (a graze between the samples of the earlier checks) the parabolic
-/// shortcutting runs afresh from the rest-to-rest timing at the full fine spacing, up to twice
-/// more, and then the rest-to-rest timing of the repaired path is returned
-/// if it passes; if it fails too, the edge holding the colliding state is re-planned around that
-/// state, a few times (within what is left of `repair_budget`), and [`PlanError::InvalidMotion`]
-/// is returned if no such motion passes.
+/// checked at both resolutions.
+///
+/// With `settings.verify_resolution`, the finished trajectory is checked once more at that
+/// resolution, and that check backs two savings. First, a `Parabolic` run is tried before any
+/// repair, on the rest-to-rest timing of the shortcut path, since its ramps often cut away
+/// the edges that graze at the fine spacing; it is returned if it passes. Second, the first
+/// parabolic run (that one, or the first after the repair) checks its ramps at four times the
+/// fine spacing (at most the motion validator's). When the motion after the repair fails
+/// (a graze between the samples of the earlier checks), the parabolic shortcutting runs afresh
+/// from the rest-to-rest timing at the full fine spacing, up to twice more, and then the
+/// rest-to-rest timing of the repaired path is returned if it passes; if it fails too, the
+/// edge holding the colliding state is re-planned around that state, a few times (within what
+/// is left of `repair_budget`), and [`PlanError::InvalidMotion`] is returned if no such motion
+/// passes.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -683,6 +697,34 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         current = p;
         out_random = s;
     }
+    let mut out_parabolic = ShortcutStats::default();
+    // The first parabolic run checks each round's ramps at a coarser spacing, leaning on the
+    // verification; a run that fails it is redone at the fine spacing.
+    let first_run = ShortcutSettings {
+        fine_resolution: settings
+            .fine_resolution
+            .map(|r| (r * FIRST_RUN_SPACING).min(motion.resolution().max(r))),
+        ..settings.clone()
+    };
+    // An optimistic run before any repair: the shortcuts often cut away the edges that graze
+    // at the fine spacing, and the verification catches any that stay.
+    if smoothing == Smoothing::Parabolic
+        && let (Some(_), Some(r)) = (settings.fine_resolution, settings.verify_resolution)
+    {
+        let mut trajectory = Trajectory::rest_to_rest(&space, &current, limits).map_err(bad_input)?;
+        let stats = parabolic(motion, validator, &mut trajectory, limits, &first_run, rng).map_err(bad_input)?;
+        out_parabolic.absorb(&stats);
+        if trajectory.check(&space, validator, r).is_ok() {
+            return Ok(Smoothed {
+                path: trajectory.to_path(&space, motion.resolution()),
+                trajectory,
+                repaired: 0,
+                random: out_random,
+                parabolic: out_parabolic,
+                fell_back: false,
+            });
+        }
+    }
     let (repaired_path, repaired) = match settings.fine_resolution {
         Some(r) => repair(&space, validator, &current, r, repair_budget, rng)?,
         None => (current, 0),
@@ -690,7 +732,6 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let rest_to_rest = Trajectory::rest_to_rest(&space, &repaired_path, limits).map_err(bad_input)?;
     let mut trajectory = rest_to_rest.clone();
     let mut current = repaired_path.clone();
-    let mut out_parabolic = ShortcutStats::default();
     // Whether a trajectory passes the verification check (or none is asked for).
     let verify = |trajectory: &Trajectory, validator: &mut V| {
         settings
@@ -706,24 +747,13 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
             if attempt > 0 {
                 trajectory = rest_to_rest.clone();
             }
-            // The first run checks each round's ramps at a coarser spacing: the verification
-            // below catches what slips between its samples, and a run that fails it is redone
-            // with the full spacing.
-            let first = ShortcutSettings {
-                fine_resolution: settings
-                    .fine_resolution
-                    .map(|r| (r * FIRST_RUN_SPACING).min(motion.resolution().max(r))),
-                ..settings.clone()
-            };
             let s = if attempt == 0 && settings.verify_resolution.is_some() {
-                &first
+                &first_run
             } else {
                 settings
             };
             let stats = parabolic(motion, validator, &mut trajectory, limits, s, rng).map_err(bad_input)?;
-            out_parabolic.attempts += stats.attempts;
-            out_parabolic.accepted += stats.accepted;
-            out_parabolic.time += stats.time;
+            out_parabolic.absorb(&stats);
             ok = verify(&trajectory, validator);
             if ok {
                 break;

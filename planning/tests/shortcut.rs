@@ -825,3 +825,76 @@ fn smoothing_detours_around_a_graze_next_to_the_goal() {
         assert_eq!(out.states.last(), Some(&goal), "the goal moved");
     }
 }
+
+/// With a verification check asked for, a parabolic run is tried before any repair: when its
+/// shortcuts cut away the one edge that grazes at the fine spacing, nothing is repaired, and
+/// the motion still passes the verification.
+#[test]
+fn an_edge_the_shortcuts_cut_away_is_not_repaired() {
+    use hearth_planning::shortcut::{Smoothing, smooth};
+    // A wall from the left up to x = 0.6, and a speck on the first edge, next to the corner.
+    fn free(q: &[f64]) -> bool {
+        let wall = q[0] < 0.6 && (0.45..=0.55).contains(&q[1]);
+        let speck = (q[0] - 0.64).hypot(q[1] - 0.46) < 0.003;
+        !wall && !speck
+    }
+    // The speck sits on the first edge, at 0.9 of its length.
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.7, 0.5], vec![0.1, 0.9]],
+    };
+    let (fine, coarse) = (0.002, 0.02);
+    let settings = ShortcutSettings {
+        fine_resolution: Some(fine),
+        verify_resolution: Some(fine),
+        ..Default::default()
+    };
+    let (mut kept, mut cut_away) = (0, 0);
+    for seed in 0..16 {
+        let mut motion = MotionValidator::new(square(), coarse);
+        let out = smooth(
+            Smoothing::Parabolic,
+            &mut motion,
+            &mut Region(free, 0),
+            &path,
+            &limits2(),
+            &settings,
+            std::time::Duration::from_secs(1),
+            &mut Pcg64Mcg::seed_from_u64(seed),
+        )
+        .expect("the corner path is clear but for the speck");
+        assert!(
+            out.trajectory.check(&square(), &mut Region(free, 0), fine).is_ok(),
+            "seed {seed}"
+        );
+        // The same random shortcutting that `smooth` starts with (same seed, same stream).
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let no_fine = ShortcutSettings {
+            fine_resolution: None,
+            ..settings.clone()
+        };
+        let (shortcut, _) = shortcut::random(&mut motion, &mut Region(free, 0), &path, &no_fine, &mut rng);
+        let (_, grazing) = shortcut::repair(
+            &square(),
+            &mut Region(free, 0),
+            &shortcut,
+            fine,
+            std::time::Duration::from_secs(1),
+            &mut rng,
+        )
+        .unwrap();
+        if grazing > 0 {
+            kept += 1;
+            if out.repaired == 0 {
+                cut_away += 1;
+            }
+        }
+    }
+    eprintln!(
+        "the grazing edge survived random shortcutting in {kept} of 16 seeds, and the parabolic run cut it away in {cut_away}"
+    );
+    assert!(
+        kept > 0,
+        "random shortcutting never kept the grazing edge: the test shows nothing"
+    );
+    assert!(cut_away > 0, "no parabolic run cut the grazing edge away");
+}

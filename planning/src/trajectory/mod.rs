@@ -860,9 +860,10 @@ fn discretise_timed<S: Space>(
             if d <= resolution || next - t < 1e-9 {
                 break;
             }
-            // Too far: retry at the step the measured speed suggests (`max` before `min` reads
-            // a NaN distance as the smallest factor, so the loop still ends).
-            dt = (next - t) * (0.96 * resolution / d).max(0.1).min(0.9);
+            // Too far: retry at the step the measured speed suggests (a NaN distance takes the
+            // smallest factor, so the loop still ends).
+            let factor = 0.96 * resolution / d;
+            dt = (next - t) * if factor.is_nan() { 0.1 } else { factor.clamp(0.1, 0.9) };
             next = t + dt;
         }
         out.extend_from_slice(&q);
