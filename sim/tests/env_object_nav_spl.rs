@@ -55,7 +55,9 @@ fn viewpoints_match_the_rendered_view_and_spl_stays_in_range() {
     let mut spls = Vec::new();
     for &p in &cells {
         let (distance, ending, spl) = probe(&mut env, p, goal);
-        let predicted = distance == 0.0;
+        // Within 1 cm of a view: the distance is interpolated between cell centres, and the
+        // robot settles a little off the centre it was put on.
+        let predicted = distance < 0.01;
         let seen = ending == Some(Ending::Success);
         table[usize::from(predicted)][usize::from(seen)] += 1;
         if seen {

@@ -209,9 +209,12 @@ impl ObjectNav {
         self.targets[self.current].field.as_ref()
     }
 
+    /// The geodesic distance to a view at `xy`, interpolated between cell centres (so the
+    /// shaping reward follows the robot's motion rather than jumping at cell borders), or
+    /// `fallback` off the field.
     fn potential_at(&self, xy: [f64; 2], fallback: f64) -> f64 {
         self.field()
-            .and_then(|f| f.at(xy))
+            .and_then(|f| f.interpolated(xy))
             .filter(|d| d.is_finite())
             .unwrap_or(fallback)
     }
@@ -387,6 +390,47 @@ mod tests {
             },
         )
         .unwrap()
+    }
+
+    /// The potential changes by about as much as the robot moves: creeping 1 mm at a time
+    /// from the start, across cell borders, it never jumps by a cell's width.
+    #[test]
+    fn the_potential_follows_small_moves_across_cell_borders() {
+        let (home, mut world, loaded, maps) = home();
+        let mut nav = fridge_nav(&home, &mut world, &loaded, &maps);
+        let start = nav.reset(&maps, &world, &mut Pcg64Mcg::seed_from_u64(0)).unwrap();
+        let field = nav.field().unwrap();
+        let (mut worst, mut steps, mut crossed) = (0.0f64, 0, 0);
+        for (dx, dy) in [(1.0, 0.0), (0.0, 1.0), (-0.6, 0.8)] {
+            let at = |k: f64| [start[0] + dx * k * 1e-3, start[1] + dy * k * 1e-3];
+            for k in 0..300 {
+                let (a, b) = (at(k as f64), at(k as f64 + 1.0));
+                // Only where every cell around both points is reachable: elsewhere the
+                // interpolation leaves cells out and may step.
+                let reachable = |p: [f64; 2]| {
+                    [[-0.5, -0.5], [0.5, -0.5], [-0.5, 0.5], [0.5, 0.5]].iter().all(|o| {
+                        let q = [p[0] + o[0] * maps.resolution, p[1] + o[1] * maps.resolution];
+                        field.at(q).is_some_and(f64::is_finite)
+                    })
+                };
+                if !(reachable(a) && reachable(b)) {
+                    continue;
+                }
+                if field.at(a) != field.at(b) {
+                    crossed += 1;
+                }
+                let jump = (nav.potential_at(a, f64::NAN) - nav.potential_at(b, f64::NAN)).abs();
+                worst = worst.max(jump);
+                steps += 1;
+            }
+        }
+        assert!(
+            steps > 300 && crossed > 3,
+            "{steps} steps, {crossed} cell borders crossed"
+        );
+        // A 1 mm move changes a distance field whose neighbours differ by at most a diagonal
+        // step by at most √2 mm.
+        assert!(worst <= 1.5e-3, "a 1 mm move changed the potential by {worst} m");
     }
 
     #[test]
