@@ -699,6 +699,12 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         out_random = s;
     }
     let mut out_parabolic = ShortcutStats::default();
+    // Whether a trajectory passes the verification check (or none is asked for).
+    let verify = |trajectory: &Trajectory, validator: &mut V| {
+        settings
+            .verify_resolution
+            .is_none_or(|r| trajectory.check(&space, validator, r).is_ok())
+    };
     // The first parabolic run checks each round's ramps at a coarser spacing, leaning on the
     // verification; a run that fails it is redone at the fine spacing.
     let first_run = ShortcutSettings {
@@ -709,13 +715,11 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     };
     // An optimistic run before any repair: the shortcuts often cut away the edges that graze
     // at the fine spacing, and the verification catches any that stay.
-    if smoothing == Smoothing::Parabolic
-        && let (Some(_), Some(r)) = (settings.fine_resolution, settings.verify_resolution)
-    {
+    if smoothing == Smoothing::Parabolic && settings.fine_resolution.is_some() && settings.verify_resolution.is_some() {
         let mut trajectory = Trajectory::rest_to_rest(&space, &current, limits).map_err(bad_input)?;
         let stats = parabolic(motion, validator, &mut trajectory, limits, &first_run, rng).map_err(bad_input)?;
         out_parabolic.absorb(&stats);
-        if trajectory.check(&space, validator, r).is_ok() {
+        if verify(&trajectory, validator) {
             return Ok(Smoothed {
                 path: trajectory.to_path(&space, motion.resolution()),
                 trajectory,
@@ -733,12 +737,6 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let rest_to_rest = Trajectory::rest_to_rest(&space, &repaired_path, limits).map_err(bad_input)?;
     let mut trajectory = rest_to_rest.clone();
     let mut current = repaired_path.clone();
-    // Whether a trajectory passes the verification check (or none is asked for).
-    let verify = |trajectory: &Trajectory, validator: &mut V| {
-        settings
-            .verify_resolution
-            .is_none_or(|r| trajectory.check(&space, validator, r).is_ok())
-    };
     let passes = if smoothing == Smoothing::Parabolic {
         let mut ok = false;
         // A shortcut motion that fails the verification (a graze between the samples of its
