@@ -423,7 +423,8 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 /// Makes a path valid at a finer resolution: every edge is checked at `fine_resolution`, and
 /// an edge that fails is replaced by a BiRRT path between its ends planned at that resolution
 /// (within `budget` for all repairs together). Returns the path and the number of edges
-/// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed.
+/// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed, and with
+/// [`PlanError::BadInput`] when `fine_resolution` is not positive and finite.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -460,6 +461,7 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     budget: Duration,
     rng: &mut R,
 ) -> Result<(Path, usize), PlanError> {
+    resolution_ok("fine_resolution", fine_resolution)?;
     let clock = Clock::new(Some(budget));
     let mut fine = MotionValidator::new(space.clone(), fine_resolution);
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
@@ -518,6 +520,18 @@ fn reroute<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         .states;
     let inner = states.len().saturating_sub(1);
     Ok(states.into_iter().take(inner).skip(1).collect())
+}
+
+/// [`PlanError::BadInput`] naming `what` unless `resolution` is positive and finite (a
+/// resolution of 0 would sample an edge without end).
+fn resolution_ok(what: &str, resolution: f64) -> Result<(), PlanError> {
+    if resolution > 0.0 && resolution.is_finite() {
+        Ok(())
+    } else {
+        Err(PlanError::BadInput(format!(
+            "{what} is {resolution}; it must be positive and finite"
+        )))
+    }
 }
 
 /// The first state on the straight motion `a → b`, sampled at `resolution`, that `validator`
@@ -662,7 +676,8 @@ pub struct Smoothed {
 /// rest-to-rest timing of the repaired path is returned if it passes; if it fails too, the
 /// edge holding the colliding state is re-planned around that state, a few times (within what
 /// is left of `repair_budget`), and [`PlanError::InvalidMotion`] is returned if no such motion
-/// passes.
+/// passes. A `fine_resolution` or `verify_resolution` that is not positive and finite is
+/// [`PlanError::BadInput`], before anything is checked.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -700,6 +715,12 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     repair_budget: Duration,
     rng: &mut R,
 ) -> Result<Smoothed, PlanError> {
+    for (what, r) in [
+        ("fine_resolution", settings.fine_resolution),
+        ("verify_resolution", settings.verify_resolution),
+    ] {
+        r.map_or(Ok(()), |r| resolution_ok(what, r))?;
+    }
     let started = std::time::Instant::now();
     let space = motion.space().clone();
     let bad_input = |e: TrajectoryError| PlanError::BadInput(e.to_string());

@@ -552,6 +552,55 @@ fn bad_input_gives_typed_errors() {
     ));
 }
 
+/// A resolution of 0 would sample an edge without end: `repair` and `smooth` refuse any
+/// resolution that is not positive and finite, naming it, before they check anything.
+#[test]
+fn resolutions_that_are_not_positive_are_bad_input() {
+    use hearth_planning::PlanError;
+    let space = square();
+    // A wall the straight edge crosses, so that a repair has work to do.
+    let wall: fn(&[f64]) -> bool = |q| !(0.5..=0.52).contains(&q[0]) || q[1] > 0.8;
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.1]],
+    };
+    let budget = std::time::Duration::from_millis(100);
+    for r in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+        let mut v = Region(wall, 0);
+        match shortcut::repair(&space, &mut v, &path, r, budget, &mut rng) {
+            Err(PlanError::BadInput(m)) => assert!(m.contains("fine_resolution"), "{m}"),
+            other => panic!("repair at {r}: {other:?}"),
+        }
+        assert_eq!(v.1, 0, "repair at {r} checked states");
+        for (fine, verify, name) in [
+            (Some(r), None, "fine_resolution"),
+            (Some(0.001), Some(r), "verify_resolution"),
+        ] {
+            let settings = ShortcutSettings {
+                fine_resolution: fine,
+                verify_resolution: verify,
+                ..ShortcutSettings::default()
+            };
+            let mut motion = MotionValidator::new(space.clone(), 0.01);
+            let out = shortcut::smooth(
+                shortcut::Smoothing::Parabolic,
+                &mut motion,
+                &mut v,
+                &path,
+                &limits2(),
+                &settings,
+                budget,
+                &mut rng,
+            );
+            match out {
+                Err(PlanError::BadInput(m)) => assert!(m.contains(name), "{m}"),
+                other => panic!("smooth with {name} {r}: {other:?}"),
+            }
+            assert_eq!(v.1, 0, "smooth with {name} {r} checked states");
+        }
+    }
+}
+
 /// A ramp joins two states, `(q0, v0)` and `(q1, v1)`: a NaN or infinite value is reported
 /// against the state it belongs to, 0 or 1, the first one when both are bad.
 #[test]
