@@ -719,7 +719,9 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         ("fine_resolution", settings.fine_resolution),
         ("verify_resolution", settings.verify_resolution),
     ] {
-        r.map_or(Ok(()), |r| resolution_ok(what, r))?;
+        if let Some(r) = r {
+            resolution_ok(what, r)?;
+        }
     }
     let started = std::time::Instant::now();
     let space = motion.space().clone();

@@ -828,16 +828,16 @@ impl Trajectory {
     }
 }
 
-/// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
-/// consecutive ones at most `resolution` apart, to `out` (and their times to `times`). Each
-/// time step is scaled from the last one's measured distance so that states come about
-/// [`SPACING_AIM`] of `resolution` apart (a step that lands too far is retried shorter in the same way); on
-/// the benchmark's trajectories that takes about a third fewer states than halving and growing
-/// the step by fixed factors.
 /// The share of the spacing that [`discretise_timed`] aims its steps at: close to 1 for few
 /// states, below it so that a slightly faster next step still lands within the spacing.
 const SPACING_AIM: f64 = 0.96;
 
+/// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
+/// consecutive ones at most `resolution` apart, to `out` (and their times to `times`). Each
+/// time step is scaled from the last one's measured distance so that states come about
+/// [`SPACING_AIM`] of `resolution` apart (a step that lands too far is retried shorter in the
+/// same way); on the benchmark's trajectories that takes about a third fewer states than
+/// halving and growing the step by fixed factors.
 fn discretise_timed<S: Space>(
     dim: usize,
     duration: f64,
