@@ -124,6 +124,7 @@ impl<S: Space> Planner<S> for Rrt {
         let zone_radius = self.goal_zone_radius * range;
         // Direct connection first, when a goal is within range.
         let mut newest = Some(0);
+        let mut last = 0;
         loop {
             if let Some(i) = newest.take()
                 && let Some(g) = nearest_goal(motion.space(), &goals, tree.state(i), range)
@@ -157,17 +158,26 @@ impl<S: Space> Planner<S> for Rrt {
             } else {
                 space.sample(rng, &mut target);
             }
+            // When some tree state is within `range` of the target, so is the nearest, and the
+            // step is the target itself: check it before the nearest-neighbour query, which an
+            // invalid target makes unnecessary. The same states are checked in the same order.
+            let reaches =
+                space.distance(tree.state(0), &target) <= range || space.distance(tree.state(last), &target) <= range;
+            if reaches && !validator.is_valid(&target) {
+                continue;
+            }
             let near = tree.nn.nearest(space, &target).expect("the tree holds the start");
             if steer(space, tree.state(near), &target, range, &mut step) == 0.0 {
                 continue;
             }
-            if !validator.is_valid(&step) {
+            if !reaches && !validator.is_valid(&step) {
                 continue;
             }
             if !motion.check_motion(validator, tree.state(near), &step) {
                 continue;
             }
-            newest = Some(tree.add(&step, Some(near)));
+            last = tree.add(&step, Some(near));
+            newest = Some(last);
         }
         Err(PlanError::Timeout {
             stats: run.stats(motion, validator, vec![tree.len()]),
