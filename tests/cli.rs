@@ -547,6 +547,15 @@ fn bench_plan_writes_results_json() {
         ),
         (&["--escape-probe", "1"][..], "--escape-probe must be in [0, 1)"),
         (&["--iterations", "0"][..], "--iterations must be positive"),
+        (&["--time-limit", "0"][..], "--time-limit must be positive"),
+        (
+            &["--resolution", "inf"][..],
+            "--resolution and --fine-resolution must be positive and finite",
+        ),
+        (
+            &["--fine-resolution", "0"][..],
+            "--resolution and --fine-resolution must be positive and finite",
+        ),
         (&["--escape-share", "0"][..], "--escape-share must be in (0, 1)"),
         (
             &["--no-escape", "--escape-probe", "0.5"][..],

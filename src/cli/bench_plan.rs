@@ -323,11 +323,14 @@ fn wrap_continuous(chain: &Chain, q: &[f64]) -> Vec<f64> {
 }
 
 pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
-    if [a.time_limit, a.resolution, a.fine_resolution]
+    if a.time_limit.is_nan() || a.time_limit <= 0.0 {
+        bail!("--time-limit must be positive");
+    }
+    if [a.resolution, a.fine_resolution]
         .iter()
-        .any(|v| v.is_nan() || *v <= 0.0)
+        .any(|v| !v.is_finite() || *v <= 0.0)
     {
-        bail!("--time-limit, --resolution and --fine-resolution must be positive");
+        bail!("--resolution and --fine-resolution must be positive and finite");
     }
     if a.iterations == Some(0) {
         bail!("--iterations must be positive");
