@@ -552,8 +552,9 @@ fn bad_input_gives_typed_errors() {
     ));
 }
 
-/// A resolution of 0 would sample an edge without end: `repair` and `smooth` refuse any
-/// resolution that is not positive and finite, naming it, before they check anything.
+/// A resolution of 0 would sample an edge without end: `repair`, `smooth` and a trajectory's
+/// `check` refuse any resolution that is not positive and finite, naming it, before they check
+/// anything.
 #[test]
 fn resolutions_that_are_not_positive_are_bad_input() {
     use hearth_planning::PlanError;
@@ -598,6 +599,12 @@ fn resolutions_that_are_not_positive_are_bad_input() {
             }
             assert_eq!(v.1, 0, "smooth with {name} {r} checked states");
         }
+        let trajectory = Trajectory::rest_to_rest(&space, &path, &limits2()).unwrap();
+        match trajectory.check(&space, &mut v, r) {
+            Err(TrajectoryError::BadResolution { value }) => assert!(value.to_bits() == r.to_bits()),
+            other => panic!("check at {r}: {other:?}"),
+        }
+        assert_eq!(v.1, 0, "a trajectory's check at {r} checked states");
     }
 }
 

@@ -108,6 +108,12 @@ pub enum TrajectoryError {
         /// Index of the state (the first such state).
         index: usize,
     },
+    /// A check resolution (a distance in the space) that is not positive and finite.
+    #[error("the check resolution is {value}; it must be positive and finite")]
+    BadResolution {
+        /// Its value.
+        value: f64,
+    },
     /// A path without states.
     #[error("the path has no states")]
     EmptyPath,
@@ -724,9 +730,10 @@ impl Trajectory {
         );
     }
 
-    /// Checks every state along the trajectory, at most `resolution` apart (one that is not
-    /// positive reads as 0.01), coarse to fine (midpoints first); `Err` carries the time of the
-    /// first colliding state found (not necessarily the earliest one).
+    /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
+    /// (midpoints first); `Err(InCollision)` carries the time of the first colliding state
+    /// found (not necessarily the earliest one). A resolution that is not positive and finite
+    /// is [`TrajectoryError::BadResolution`], before any state is checked.
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -751,6 +758,8 @@ impl Trajectory {
     /// let mut q = [0.0];
     /// across.sample(time, &mut q, None);
     /// assert!(q[0] >= 0.5);
+    /// let zero = across.check(&space, &mut Left(0), 0.0);
+    /// assert_eq!(zero, Err(TrajectoryError::BadResolution { value: 0.0 }));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn check<S: Space, V: StateValidator + ?Sized>(
@@ -759,6 +768,9 @@ impl Trajectory {
         validator: &mut V,
         resolution: f64,
     ) -> Result<(), TrajectoryError> {
+        if !(resolution.is_finite() && resolution > 0.0) {
+            return Err(TrajectoryError::BadResolution { value: resolution });
+        }
         let mut flat = Vec::new();
         let mut times = Vec::new();
         let sample = |t: f64, q: &mut [f64]| self.sample(t, q, None);
