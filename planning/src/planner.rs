@@ -509,14 +509,22 @@ pub fn default_range<S: Space>(space: &S) -> f64 {
     0.2 * 2.0 * space.distance(space.lower(), &centre)
 }
 
+/// `value` if it is positive and finite, else [`PlanError::BadInput`] naming the setting `what`.
+pub(crate) fn positive_finite(what: &str, value: f64) -> Result<f64, PlanError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(PlanError::BadInput(format!(
+            "{what} is {value}; it must be positive and finite"
+        )))
+    }
+}
+
 /// The step size from a setting: `Some(r)` must be positive and finite, `None` is
 /// [`default_range`] times `scale` (or 1 for a zero-extent space).
 pub(crate) fn resolve_range<S: Space>(space: &S, range: Option<f64>, scale: f64) -> Result<f64, PlanError> {
     match range {
-        Some(r) if r.is_finite() && r > 0.0 => Ok(r),
-        Some(r) => Err(PlanError::BadInput(format!(
-            "range is {r}; it must be positive and finite"
-        ))),
+        Some(r) => positive_finite("range", r),
         None => {
             let r = default_range(space) * scale;
             Ok(if r.is_finite() && r > 0.0 { r } else { 1.0 })

@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
-use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
+use crate::planner::{
+    Budget, Path, PlanRequest, Planner, Run, Solution, Tree, positive_finite, resolve_range, valid_goals,
+};
 use crate::space::{Space, pull_towards, steer};
 use crate::validity::StateValidator;
 
@@ -107,12 +109,7 @@ impl<S: Space> Planner<S> for Rrt {
                 self.goal_zone
             )));
         }
-        if !(self.goal_zone_radius.is_finite() && self.goal_zone_radius > 0.0) {
-            return Err(PlanError::BadInput(format!(
-                "goal_zone_radius is {}; it must be positive and finite",
-                self.goal_zone_radius
-            )));
-        }
+        positive_finite("goal_zone_radius", self.goal_zone_radius)?;
         let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
         let range = resolve_range(space, self.range, 1.0)?;

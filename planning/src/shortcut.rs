@@ -36,7 +36,7 @@ use rand::{Rng, RngExt};
 use crate::birrt::BiRrt;
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
-use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
+use crate::planner::{Budget, Goal, Path, PlanRequest, Planner, positive_finite};
 use crate::space::{Space, steer};
 use crate::trajectory::{Limits, Trajectory, TrajectoryError};
 use crate::validity::StateValidator;
@@ -461,7 +461,8 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     budget: Duration,
     rng: &mut R,
 ) -> Result<(Path, usize), PlanError> {
-    resolution_ok("fine_resolution", fine_resolution)?;
+    // A resolution of 0 would sample an edge without end.
+    positive_finite("fine_resolution", fine_resolution)?;
     let clock = Clock::new(Some(budget));
     let mut fine = MotionValidator::new(space.clone(), fine_resolution);
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
@@ -520,18 +521,6 @@ fn reroute<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         .states;
     let inner = states.len().saturating_sub(1);
     Ok(states.into_iter().take(inner).skip(1).collect())
-}
-
-/// [`PlanError::BadInput`] naming `what` unless `resolution` is positive and finite (a
-/// resolution of 0 would sample an edge without end).
-fn resolution_ok(what: &str, resolution: f64) -> Result<(), PlanError> {
-    if resolution > 0.0 && resolution.is_finite() {
-        Ok(())
-    } else {
-        Err(PlanError::BadInput(format!(
-            "{what} is {resolution}; it must be positive and finite"
-        )))
-    }
 }
 
 /// The first state on the straight motion `a → b`, sampled at `resolution`, that `validator`
@@ -720,7 +709,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         ("verify_resolution", settings.verify_resolution),
     ] {
         if let Some(r) = r {
-            resolution_ok(what, r)?;
+            positive_finite(what, r)?;
         }
     }
     let started = std::time::Instant::now();

@@ -39,9 +39,14 @@ impl Reference {
         }
     }
 
-    fn is_valid(&mut self, q: &[f64]) -> bool {
+    /// Poses every link at `q` (in `poses`).
+    fn pose(&mut self, q: &[f64]) {
         self.chain.scatter(q, &mut self.q_full);
         self.model.fk_from(&self.base, &self.q_full, &mut self.poses).unwrap();
+    }
+
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.pose(q);
         let margin = self.scene.margin();
         for l in 0..self.model.links().len() {
             let Some(s) = self.model.link_shape(l) else { continue };
@@ -205,7 +210,7 @@ fn a_robot_far_from_the_origin_gets_the_same_self_collision_answers() {
     let qs: Vec<Vec<f64>> = random_configurations(&chain, 13, 1500)
         .into_iter()
         .filter(|q| {
-            r.is_valid(q);
+            r.pose(q);
             r.pairs.iter().all(|&(a, b)| {
                 let (sa, sb) = (r.model.link_shape(a).unwrap(), r.model.link_shape(b).unwrap());
                 let (pa, pb) = (to_pose(&(r.poses[a] * sa.origin)), to_pose(&(r.poses[b] * sb.origin)));
