@@ -2,6 +2,8 @@
 
 use std::collections::VecDeque;
 
+use crate::error::PlanError;
+use crate::planner::positive_finite;
 use crate::space::Space;
 use crate::validity::StateValidator;
 
@@ -37,7 +39,8 @@ pub struct MotionValidator<S: Space> {
 
 impl<S: Space> MotionValidator<S> {
     /// A validator that checks states at most `resolution` apart (in the space's distance). A
-    /// resolution that is not positive (or NaN) counts as 0.01.
+    /// resolution that is not positive and finite (0, negative, NaN, infinite) counts as 0.01;
+    /// [`MotionValidator::try_new`] refuses it instead.
     ///
     /// ```
     /// use hearth_planning::motion::MotionValidator;
@@ -45,14 +48,41 @@ impl<S: Space> MotionValidator<S> {
     ///
     /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
     /// assert_eq!(MotionValidator::new(space.clone(), 0.05).resolution(), 0.05);
-    /// assert_eq!(MotionValidator::new(space, 0.0).resolution(), 0.01);
+    /// assert_eq!(MotionValidator::new(space.clone(), 0.0).resolution(), 0.01);
+    /// // An infinite spacing would check no state between an edge's ends.
+    /// assert_eq!(MotionValidator::new(space, f64::INFINITY).resolution(), 0.01);
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn new(space: S, resolution: f64) -> Self {
+        let resolution = positive_finite("resolution", resolution).unwrap_or(0.01);
+        Self::with_resolution(space, resolution)
+    }
+
+    /// A validator that checks states at most `resolution` apart, or
+    /// [`PlanError::BadInput`] naming the value when `resolution` is not positive and finite.
+    ///
+    /// ```
+    /// use hearth_planning::PlanError;
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
+    /// assert_eq!(MotionValidator::try_new(space.clone(), 0.05)?.resolution(), 0.05);
+    /// for bad in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+    ///     let err = MotionValidator::try_new(space.clone(), bad).err().unwrap();
+    ///     assert!(matches!(err, PlanError::BadInput(ref m) if m.contains("resolution")));
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn try_new(space: S, resolution: f64) -> Result<Self, PlanError> {
+        Ok(Self::with_resolution(space, positive_finite("resolution", resolution)?))
+    }
+
+    fn with_resolution(space: S, resolution: f64) -> Self {
         let dim = space.dim();
         Self {
             space,
-            resolution: if resolution > 0.0 { resolution } else { 0.01 },
+            resolution,
             state: vec![0.0; dim],
             batch: Vec::with_capacity(BATCH * dim),
             queue: VecDeque::with_capacity(64),

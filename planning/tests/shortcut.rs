@@ -605,6 +605,16 @@ fn resolutions_that_are_not_positive_are_bad_input() {
             other => panic!("check at {r}: {other:?}"),
         }
         assert_eq!(v.1, 0, "a trajectory's check at {r} checked states");
+        // The motion validator refuses it too, and its infallible constructor and the
+        // trajectory's sampling read it as 0.01 (an infinite spacing would check nothing).
+        match MotionValidator::try_new(space.clone(), r) {
+            Err(PlanError::BadInput(m)) => assert!(m.contains("resolution"), "{m}"),
+            other => panic!("try_new at {r}: {:?}", other.map(|m| m.resolution())),
+        }
+        assert_eq!(MotionValidator::new(space.clone(), r).resolution(), 0.01);
+        let states = trajectory.to_path(&space, r).states;
+        assert!(states.len() > 80, "to_path at {r}: {} states", states.len());
+        assert!(states.windows(2).all(|w| space.distance(&w[0], &w[1]) <= 0.01 + 1e-12));
     }
 }
 

@@ -656,8 +656,8 @@ impl Trajectory {
 
     /// States along the trajectory no more than `resolution` apart (in the space's distance),
     /// from the first state to the last, with continuous coordinates wrapped back. A
-    /// `resolution` that is not positive (or NaN) reads as 0.01, as in [`Trajectory::length`]
-    /// and [`Trajectory::check`].
+    /// `resolution` that is not positive and finite reads as 0.01, as in
+    /// [`Trajectory::length`] ([`Trajectory::check`] refuses it instead).
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -690,7 +690,7 @@ impl Trajectory {
     }
 
     /// Length of the trajectory's path in the space's metric (sampled at `resolution`; one that
-    /// is not positive reads as 0.01).
+    /// is not positive and finite reads as 0.01).
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -859,7 +859,11 @@ fn discretise_timed<S: Space>(
     out: &mut Vec<f64>,
     mut times: Option<&mut Vec<f64>>,
 ) {
-    let resolution = if resolution > 0.0 { resolution } else { 0.01 };
+    let resolution = if resolution.is_finite() && resolution > 0.0 {
+        resolution
+    } else {
+        0.01
+    };
     let (mut prev, mut q) = (vec![0.0; dim], vec![0.0; dim]);
     sample(0.0, &mut prev);
     out.extend_from_slice(&prev);
