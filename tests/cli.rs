@@ -514,7 +514,7 @@ fn bench_plan_writes_results_json() {
     assert!(stopped || within, "{r}");
     // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
     for (extra, says) in [
-        (&[][..], "RRT step 6 rad, goal zone 0.5"),
+        (&[][..], "RRT step 6 rad, goal zone 0.8"),
         (&["--range", "2", "--goal-zone", "0"][..], "RRT step 2 rad, goal zone 0"),
     ] {
         let common = [
