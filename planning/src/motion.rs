@@ -3,7 +3,7 @@
 use std::collections::VecDeque;
 
 use crate::error::PlanError;
-use crate::planner::positive_finite;
+use crate::planner::{positive_finite, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
 
@@ -54,8 +54,7 @@ impl<S: Space> MotionValidator<S> {
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn new(space: S, resolution: f64) -> Self {
-        let resolution = positive_finite("resolution", resolution).unwrap_or(0.01);
-        Self::with_resolution(space, resolution)
+        Self::with_resolution(space, resolution_or_default(resolution))
     }
 
     /// A validator that checks states at most `resolution` apart, or

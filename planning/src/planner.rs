@@ -509,15 +509,20 @@ pub fn default_range<S: Space>(space: &S) -> f64 {
     0.2 * 2.0 * space.distance(space.lower(), &centre)
 }
 
+/// `value` if it is positive and finite.
+pub(crate) fn positive(value: f64) -> Option<f64> {
+    (value.is_finite() && value > 0.0).then_some(value)
+}
+
 /// `value` if it is positive and finite, else [`PlanError::BadInput`] naming the setting `what`.
 pub(crate) fn positive_finite(what: &str, value: f64) -> Result<f64, PlanError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(PlanError::BadInput(format!(
-            "{what} is {value}; it must be positive and finite"
-        )))
-    }
+    positive(value).ok_or_else(|| PlanError::BadInput(format!("{what} is {value}; it must be positive and finite")))
+}
+
+/// The spacing that the samplers without a `Result` (`MotionValidator::new`, a trajectory's
+/// `to_path` and `length`) use for a resolution that is not positive and finite.
+pub(crate) fn resolution_or_default(resolution: f64) -> f64 {
+    positive(resolution).unwrap_or(0.01)
 }
 
 /// The step size from a setting: `Some(r)` must be positive and finite, `None` is

@@ -210,19 +210,17 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
 /// 0.45 of the step from a goal instead of the planner's 0.3: 1,064 against 1,043 of 1,120
 /// plans over five paired seeds, more in each (twenty-third round).
 fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
-    let (default_range, default_zone) = match robot {
-        "fetch" | "panda" => (Some(6.0), 0.8),
-        _ => (None, Rrt::default().goal_zone),
-    };
-    let goal_zone_radius = match robot {
-        "fetch" => 0.45,
-        _ => Rrt::default().goal_zone_radius,
+    let planner = Rrt::default();
+    let (default_range, default_zone, goal_zone_radius) = match robot {
+        "fetch" => (Some(6.0), 0.8, 0.45),
+        "panda" => (Some(6.0), 0.8, planner.goal_zone_radius),
+        _ => (None, planner.goal_zone, planner.goal_zone_radius),
     };
     Rrt {
         range: range.or(default_range),
         goal_zone: goal_zone.unwrap_or(default_zone),
         goal_zone_radius,
-        ..Rrt::default()
+        ..planner
     }
 }
 

@@ -32,7 +32,7 @@ use std::sync::Arc;
 
 pub use limits::Limits;
 
-use crate::planner::Path;
+use crate::planner::{Path, positive, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
 use generator::{Generated, Sync};
@@ -768,7 +768,7 @@ impl Trajectory {
         validator: &mut V,
         resolution: f64,
     ) -> Result<(), TrajectoryError> {
-        if !(resolution.is_finite() && resolution > 0.0) {
+        if positive(resolution).is_none() {
             return Err(TrajectoryError::BadResolution { value: resolution });
         }
         let mut flat = Vec::new();
@@ -859,11 +859,7 @@ fn discretise_timed<S: Space>(
     out: &mut Vec<f64>,
     mut times: Option<&mut Vec<f64>>,
 ) {
-    let resolution = if resolution.is_finite() && resolution > 0.0 {
-        resolution
-    } else {
-        0.01
-    };
+    let resolution = resolution_or_default(resolution);
     let (mut prev, mut q) = (vec![0.0; dim], vec![0.0; dim]);
     sample(0.0, &mut prev);
     out.extend_from_slice(&prev);
