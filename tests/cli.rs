@@ -574,6 +574,36 @@ fn bench_plan_writes_results_json() {
             "{extra:?}: {err}"
         );
     }
+    // A start outside the joint limits is skipped for that reason, whatever its links touch.
+    let mut far: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(data).unwrap()).unwrap();
+    let p1 = far["problems"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|p| p["id"] == 1)
+        .unwrap();
+    // (Every joint at 1e308 rad puts link 1 against link 5.)
+    p1["start"] = serde_json::json!(vec![1e308; 7]);
+    let far_path = dir.join("far_start.json");
+    std::fs::write(&far_path, far.to_string()).unwrap();
+    let (_, v) = bench_json(
+        &[
+            "--problems",
+            far_path.to_str().unwrap(),
+            "--warm-up",
+            "0",
+            "--shortcut",
+            "none",
+        ],
+        "far.json",
+    );
+    let skipped = field(&v, "skipped");
+    assert!(
+        skipped.iter().any(|s| s
+            .as_str()
+            .is_some_and(|s| s.contains("outside our model's limits: start"))),
+        "{skipped:?}"
+    );
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
         .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])
         .output()

@@ -12,7 +12,7 @@ use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
-use hearth_planning::space::JointSpace;
+use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
@@ -461,6 +461,13 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let mut v = RobotValidity::new(rs.chain.clone(), rs.matrix.clone(), Arc::new(problem.scene()));
                 v.set_reference(&rs.reference)?;
                 let start = wrap_continuous(&rs.chain, &problem.start);
+                // Limits before collisions: a start far outside them would otherwise be
+                // reported as whatever its links happen to touch there.
+                if let Err(e) = space.check(&start) {
+                    row["skipped"] = json!(format!("outside our model's limits: start: {e}"));
+                    results.push(row);
+                    continue;
+                }
                 if let Some(c) = v.explain(&start) {
                     row["skipped"] = json!(format!("start collides in our model: {c}"));
                     results.push(row);
