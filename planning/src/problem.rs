@@ -5,9 +5,11 @@
 //! configuration and one or more goal configurations. [`JointsInfo`] is the robot's
 //! `joints.json` (limits, allowed self-collision pairs, finger opening).
 //!
-//! Everything is checked on load: malformed JSON, an unknown obstacle kind, a configuration
-//! whose length differs from `joint_names`, a non-finite number, a non-unit quaternion or a
-//! negative size gives a [`ProblemError`] that names the file, the problem id and the field.
+//! Everything is checked on load: malformed JSON, an unknown field (a misspelt `valid` or
+//! `obstacles` would otherwise load as its default), an unknown obstacle kind, a field of
+//! another kind (a `radius` on a box), a configuration whose length differs from
+//! `joint_names`, a non-finite number, a non-unit quaternion or a negative size gives a
+//! [`ProblemError`] that names the file, the problem id and the field.
 //!
 //! ```
 //! use hearth_planning::problem::ProblemSet;
@@ -122,6 +124,10 @@ pub enum Defect {
     /// An obstacle coordinate or size beyond ±[`MAX_EXTENT`].
     #[error("is {0}, beyond ±{max} m", max = MAX_EXTENT)]
     TooLarge(f64),
+    /// A field that the obstacle's `kind` does not have (a `radius` on a box): a file that
+    /// sets it meant another kind or another field.
+    #[error("does not belong to a {0}")]
+    NotForKind(&'static str),
     /// A lower limit above the upper one.
     #[error("lower limit {lower} is above upper limit {upper}")]
     InvertedLimits {
@@ -867,6 +873,7 @@ fn read(path: &Path) -> Result<String, ProblemError> {
 // ---- raw file layout and checks -------------------------------------------------------------
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawSet {
     robot: String,
     family: String,
@@ -877,6 +884,7 @@ struct RawSet {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawProblem {
     id: u32,
     #[serde(default = "yes")]
@@ -892,6 +900,7 @@ fn yes() -> bool {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawObstacle {
     kind: String,
     center: Option<Vec<f64>>,
@@ -1023,6 +1032,22 @@ impl RawObstacle {
     fn convert(self, ctx: &Ctx<'_>, i: usize) -> Result<ObstacleSpec, ProblemError> {
         let f = |name: &str| format!("obstacles[{i}].{name}");
         let center = ctx.point(&f("center"), self.center.as_ref())?;
+        // Fields of another kind: (field, present, kinds that have it).
+        let fields = [
+            ("half_extents", self.half_extents.is_some(), &["box"][..]),
+            ("radius", self.radius.is_some(), &["sphere", "cylinder"][..]),
+            ("half_length", self.half_length.is_some(), &["cylinder"][..]),
+            ("quat_xyzw", self.quat_xyzw.is_some(), &["box", "cylinder"][..]),
+        ];
+        for kind in ["box", "sphere", "cylinder"] {
+            if self.kind == kind
+                && let Some((field, ..)) = fields
+                    .iter()
+                    .find(|(_, present, kinds)| *present && !kinds.contains(&kind))
+            {
+                return Err(ctx.err(f(field), Defect::NotForKind(kind)));
+            }
+        }
         let name = self.name;
         Ok(match self.kind.as_str() {
             "box" => ObstacleSpec::Box {

@@ -247,6 +247,53 @@ fn negative_and_missing_sizes() {
 }
 
 #[test]
+fn typos_and_fields_of_another_kind_are_errors() {
+    // A misspelt optional field would otherwise load as its default: no obstacles at all, or a
+    // problem the set marks invalid counted as valid.
+    for (from, to, says) in [
+        (r#""obstacles":"#, r#""obstacle":"#, "unknown field `obstacle`"),
+        (r#""valid": true"#, r#""vaild": false"#, "unknown field `vaild`"),
+        (
+            r#""family": "unit""#,
+            r#""family": "unit", "familly": "x""#,
+            "unknown field `familly`",
+        ),
+        (r#""radius": 0.2"#, r#""raduis": 0.2"#, "unknown field `raduis`"),
+    ] {
+        let json = GOOD.replacen(from, to, 1);
+        assert_ne!(json, GOOD, "{from}");
+        let e = ProblemSet::from_json_str(&json).unwrap_err();
+        assert!(
+            matches!(e, ProblemError::Json { .. }) && e.to_string().contains(says),
+            "{e}"
+        );
+    }
+    // A field that belongs to another kind of obstacle names the obstacle and the field.
+    let (problem, field, defect) = invalid(&GOOD.replace(r#""radius": 0.2"#, r#""radius": 0.2, "half_length": 1"#));
+    assert_eq!((problem, field.as_str()), (Some(5), "obstacles[1].half_length"));
+    assert_eq!(defect, Defect::NotForKind("sphere"));
+    let (_, field, defect) = invalid(&GOOD.replace(r#""name": "b""#, r#""name": "b", "radius": 0.1"#));
+    assert_eq!(
+        (field.as_str(), defect),
+        ("obstacles[0].radius", Defect::NotForKind("box"))
+    );
+    let (_, field, defect) = invalid(&GOOD.replace(
+        r#""radius": 0.1, "half_length": 0.5"#,
+        r#""radius": 0.1, "half_length": 0.5, "half_extents": [1, 1, 1]"#,
+    ));
+    assert_eq!(
+        (field.as_str(), defect),
+        ("obstacles[2].half_extents", Defect::NotForKind("cylinder"))
+    );
+    let e = ProblemSet::from_json_str(&GOOD.replace(r#""radius": 0.2"#, r#""radius": 0.2, "quat_xyzw": [0, 0, 0, 1]"#))
+        .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "<string>: problem 5: obstacles[1].quat_xyzw does not belong to a sphere"
+    );
+}
+
+#[test]
 fn non_finite_values() {
     // JSON has no NaN literal; out-of-range numbers are a parse error …
     let e = ProblemSet::from_json_str(&GOOD.replace(r#""start": [0, 0]"#, r#""start": [0, 1e999]"#)).unwrap_err();
