@@ -27,6 +27,7 @@ use crate::validity::StateValidator;
 /// assert!(mv.check_motion(&mut wall, &[-1.0], &[0.4]));
 /// assert!(!mv.check_motion(&mut wall, &[-1.0], &[1.0]));
 /// ```
+#[derive(Clone)]
 pub struct MotionValidator<S: Space> {
     space: S,
     resolution: f64,

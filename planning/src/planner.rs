@@ -5,6 +5,9 @@
 //! roadmap); the space, the [`MotionValidator`] and the [`StateValidator`] belong to the
 //! caller and are lent to each [`Planner::plan`] call, so one planner answers many queries.
 
+use std::cell::RefCell;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use rand::Rng;
@@ -401,11 +404,35 @@ pub trait Planner<S: Space> {
     ) -> Result<Solution, PlanError>;
 }
 
+thread_local! {
+    /// The stop count of the [`Race`](crate::race::Race) that this thread plans for, if any.
+    static STOP_AT: RefCell<Option<Arc<AtomicU64>>> = const { RefCell::new(None) };
+}
+
+/// Runs `f` with `stop` as this thread's stop count: every planning run started inside `f`
+/// ends (as a timeout) once it has made as many iterations as `stop` holds.
+pub(crate) fn with_stop_at<T>(stop: &Arc<AtomicU64>, f: impl FnOnce() -> T) -> T {
+    /// Puts the thread's previous stop count back, even when `f` panics.
+    struct Restore(Option<Arc<AtomicU64>>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let before = self.0.take();
+            STOP_AT.with(|s| *s.borrow_mut() = before);
+        }
+    }
+    let _restore = Restore(STOP_AT.with(|s| s.replace(Some(Arc::clone(stop)))));
+    f()
+}
+
 /// The budget and counters of one planning call.
 pub(crate) struct Run {
     started: Instant,
     deadline: Option<Instant>,
     max_iterations: u64,
+    /// An iteration count shared by the planners of one [`Race`](crate::race::Race) (set
+    /// on this thread by [`with_stop_at`]): once this run has made that many iterations,
+    /// another copy has already found a path in as few, so this one stops.
+    stop_at: Option<Arc<AtomicU64>>,
     checks0: u64,
     motions0: u64,
     pub(crate) iterations: u64,
@@ -425,6 +452,7 @@ impl Run {
             started,
             deadline: time.and_then(|t| started.checked_add(t)),
             max_iterations: budget.iterations.unwrap_or(u64::MAX),
+            stop_at: STOP_AT.with(|s| s.borrow().clone()),
             checks0: validator.checks(),
             motions0: motion.motions(),
             iterations: 0,
@@ -435,6 +463,11 @@ impl Run {
     #[inline]
     pub(crate) fn next(&mut self) -> bool {
         if self.iterations >= self.max_iterations || self.deadline.is_some_and(|d| Instant::now() >= d) {
+            return false;
+        }
+        if let Some(stop) = &self.stop_at
+            && self.iterations >= stop.load(Ordering::Relaxed)
+        {
             return false;
         }
         self.iterations += 1;

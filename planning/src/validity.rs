@@ -230,6 +230,7 @@ fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
 /// assert!(!v.is_valid(&reaching));
 /// assert!(v.explain(&reaching).unwrap().to_string().contains("wall"));
 /// ```
+#[derive(Clone)]
 pub struct RobotValidity {
     model: RobotModel,
     chain: Chain,
@@ -295,6 +296,7 @@ const BOUND_SLACK_REL: f64 = 1e-3;
 ///
 /// Nothing is cached across calls except which check failed last (tried first next time), so
 /// moving obstacles stay correct and answers are exactly the exact-geometry answers.
+#[derive(Clone)]
 struct BroadPhase {
     /// Per link (indexed by link id): centre of the bounding sphere in the link frame.
     local_center: Vec<Point3<f64>>,

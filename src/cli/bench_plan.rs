@@ -16,7 +16,7 @@ use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::Limits;
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
-    PlanRequest, Planner, RobotValidity, Rrt, StateValidator,
+    PlanRequest, Race, RobotValidity, Rrt, StateValidator,
 };
 use hearth_sim::randomize::mix;
 use rand::SeedableRng;
@@ -129,6 +129,11 @@ pub struct BenchPlanArgs {
     /// plans of a program run. See `docs/planning-log.md`.
     #[arg(long, default_value_t = 1_000_000)]
     warm_up: usize,
+    /// Copies of the planner racing on their own threads per plan (`hearth_planning::Race`:
+    /// the path found in the fewest iterations wins, so runs stay reproducible). 1, the
+    /// default, plans on one thread, as the peers in `docs/benchmarks.md` do.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
+    threads: u16,
     /// Path post-processing.
     #[arg(long, value_enum, default_value_t = ShortcutKind::Parabolic)]
     shortcut: ShortcutKind,
@@ -430,7 +435,12 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     format!("; LazyPRM step {range}")
                 }
             };
-            eprintln!("{}: {}{step}", set.robot, s.note);
+            let racing = if a.threads > 1 {
+                format!("; {} copies racing per plan", a.threads)
+            } else {
+                String::new()
+            };
+            eprintln!("{}: {}{step}{racing}", set.robot, s.note);
             if a.warm_up > 0 {
                 let mut v =
                     RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
@@ -482,13 +492,21 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 };
                 let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(plan_seed(a.seed, problem.id, rep));
                 let before = v.checks();
+                let threads = usize::from(a.threads);
                 let outcome = match a.planner {
-                    PlannerKind::Rrt => rrt.clone().plan(&mut motion, &mut v, &request, &budget, &mut rng),
-                    PlannerKind::Birrt => birrt.clone().plan(&mut motion, &mut v, &request, &budget, &mut rng),
-                    PlannerKind::Lazyprm => LazyPrm::new(LazyPrmSettings {
-                        range: lazyprm_range(&set.robot, a.range),
-                        ..LazyPrmSettings::default()
-                    })
+                    PlannerKind::Rrt => {
+                        Race::new(rrt.clone(), threads).plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                    }
+                    PlannerKind::Birrt => {
+                        Race::new(birrt.clone(), threads).plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                    }
+                    PlannerKind::Lazyprm => Race::new(
+                        LazyPrm::new(LazyPrmSettings {
+                            range: lazyprm_range(&set.robot, a.range),
+                            ..LazyPrmSettings::default()
+                        }),
+                        threads,
+                    )
                     .plan(&mut motion, &mut v, &request, &budget, &mut rng),
                 };
                 match outcome {
