@@ -476,6 +476,29 @@ fn bench_plan_writes_results_json() {
             && err.contains("LazyPRM step the planner's default"),
         "{err}"
     );
+    // Two racing copies per plan: said on the setup line; the same seed plans the same paths.
+    let raced = |name: &str| {
+        let (err, v) = bench_json(
+            &[
+                "--threads",
+                "2",
+                "--iterations",
+                "20000",
+                "--time-limit",
+                "100",
+                "--emit-paths",
+                "--shortcut",
+                "none",
+            ],
+            name,
+        );
+        assert!(err.contains("2 copies racing per plan"), "{err}");
+        v
+    };
+    let (a, b) = (raced("race_a.json"), raced("race_b.json"));
+    assert_eq!(field(&a, "success"), field(&b, "success"));
+    assert!(field(&a, "success").contains(&serde_json::json!(true)), "{a}");
+    assert_eq!(field(&a, "path"), field(&b, "path"));
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
     assert_eq!(field(&v, "id"), vec![serde_json::json!(41)]);
@@ -547,6 +570,7 @@ fn bench_plan_writes_results_json() {
         ),
         (&["--escape-probe", "1"][..], "--escape-probe must be in [0, 1)"),
         (&["--iterations", "0"][..], "--iterations must be positive"),
+        (&["--threads", "0"][..], "0 is not in 1..=256"),
         (&["--time-limit", "0"][..], "--time-limit must be positive"),
         (
             &["--resolution", "inf"][..],
