@@ -28,8 +28,9 @@ use crate::validity::StateValidator;
 ///
 /// Thread 0 plans on the calling thread with the caller's validators; the others plan on
 /// clones of them. Each copy draws its random stream from a seed taken from the caller's
-/// generator, so a race with one thread plans exactly as the planner alone does, and a race
-/// advances the caller's generator by one draw per thread.
+/// generator; a race of one thread plans exactly as the planner alone does, with the caller's
+/// generator itself. Every plan clones the planner and both validators for each thread
+/// after the first: a [`LazyPrm`](crate::LazyPrm) with a large roadmap pays for copying it.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
