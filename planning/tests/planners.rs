@@ -12,7 +12,7 @@ use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError,
-    PlanRequest, Planner, Rrt, Solution,
+    PlanRequest, Planner, Race, Rrt, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -438,6 +438,28 @@ fn panda_table_lazy_prm() {
 
 /// Runs `make`'s planner on every MBM problem of the excerpt whose start and goals are valid
 /// in our (slightly padded) model; asserts at least one is solved.
+/// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
+#[test]
+fn panda_table_birrt_race() {
+    let (space, mut v) = table_world();
+    let mut paths = Vec::new();
+    for _ in 0..2 {
+        let mut motion = MotionValidator::new(space.clone(), PANDA_RESOLUTION);
+        let s = Race::new(BiRrt::default(), 2)
+            .plan(
+                &mut motion,
+                &mut v,
+                &table_request(),
+                &budget(50_000),
+                &mut Pcg64Mcg::seed_from_u64(11),
+            )
+            .unwrap();
+        check_solution(&space, PANDA_RESOLUTION, &mut v, &table_request(), &s);
+        paths.push(s.path);
+    }
+    assert_eq!(paths[0], paths[1]);
+}
+
 fn mbm<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P) {
     let set = ProblemSet::load(data("panda_table_pick.json")).unwrap();
     let mut solved = 0;

@@ -1,18 +1,13 @@
 //! [`Race`]: several copies of a planner on their own threads. The winner is the copy that found
 //! its path in the fewest iterations, so a race is reproducible; it answers bad input as the
-//! planner alone does.
+//! planner alone does. (The Panda's own validator races in `planners.rs`.)
 
-use std::sync::{Arc, OnceLock};
-
-use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
-use hearth_planning::obstacles::{Obstacle, ParryScene};
 use hearth_planning::space::JointSpace;
-use hearth_planning::validity::{RobotValidity, StateValidator};
+use hearth_planning::validity::StateValidator;
 use hearth_planning::{
     BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanError, PlanRequest, Planner, Race, Rrt,
     Solution,
 };
-use parry3d::math::{Pose, Vector};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -173,51 +168,4 @@ fn lazy_prm_keeps_the_winners_roadmap() {
         )
         .unwrap();
     assert!(second.path.states.iter().any(|q| (0.48..=0.52).contains(&q[1])));
-}
-
-/// The Panda arm over a table with a post on it: the robot's own validator in a race.
-#[test]
-fn panda_robot_validity_races() {
-    static ACM: OnceLock<SelfCollisionMatrix> = OnceLock::new();
-    let acm = ACM
-        .get_or_init(|| {
-            let m = RobotModel::builtin("panda").unwrap();
-            SelfCollisionMatrix::compute(
-                &m,
-                &SelfCollisionSettings {
-                    samples: 300,
-                    ..Default::default()
-                },
-            )
-        })
-        .clone();
-    let m = RobotModel::builtin("panda").unwrap();
-    let arm = Chain::named(&m, "arm").unwrap();
-    let space = JointSpace::from_chain(&arm).unwrap();
-    let table = Obstacle::cuboid("table", Pose::translation(0.5, 0.0, 0.2), Vector::new(0.3, 0.6, 0.02));
-    let post = Obstacle::cuboid("post", Pose::translation(0.5, 0.0, 0.45), Vector::new(0.05, 0.05, 0.25));
-    let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table, post])));
-    let request = PlanRequest::new(
-        vec![-0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785],
-        Goal::Config(vec![0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785]),
-    );
-    let mut paths = Vec::new();
-    for _ in 0..2 {
-        let mut motion = MotionValidator::new(space.clone(), 0.02);
-        let s = Race::new(BiRrt::default(), 2)
-            .plan(
-                &mut motion,
-                &mut v,
-                &request,
-                &Budget::iterations(50_000),
-                &mut Pcg64Mcg::seed_from_u64(11),
-            )
-            .unwrap();
-        assert!(s.path.states.iter().all(|q| v.is_valid(q)));
-        for w in s.path.states.windows(2) {
-            assert!(motion.check_motion(&mut v, &w[0], &w[1]));
-        }
-        paths.push(s.path);
-    }
-    assert_eq!(paths[0], paths[1]);
 }
