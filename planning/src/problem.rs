@@ -1039,14 +1039,14 @@ impl RawObstacle {
             ("half_length", self.half_length.is_some(), &["cylinder"][..]),
             ("quat_xyzw", self.quat_xyzw.is_some(), &["box", "cylinder"][..]),
         ];
-        for kind in ["box", "sphere", "cylinder"] {
-            if self.kind == kind
-                && let Some((field, ..)) = fields
-                    .iter()
-                    .find(|(_, present, kinds)| *present && !kinds.contains(&kind))
-            {
-                return Err(ctx.err(f(field), Defect::NotForKind(kind)));
-            }
+        // (An unknown kind is reported below, whatever its fields.)
+        let known = ["box", "sphere", "cylinder"].into_iter().find(|k| *k == self.kind);
+        if let Some(kind) = known
+            && let Some((field, ..)) = fields
+                .iter()
+                .find(|(_, present, kinds)| *present && !kinds.contains(&kind))
+        {
+            return Err(ctx.err(f(field), Defect::NotForKind(kind)));
         }
         let name = self.name;
         Ok(match self.kind.as_str() {

@@ -436,8 +436,6 @@ fn panda_table_lazy_prm() {
     );
 }
 
-/// Runs `make`'s planner on every MBM problem of the excerpt whose start and goals are valid
-/// in our (slightly padded) model; asserts at least one is solved.
 /// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
 #[test]
 fn panda_table_birrt_race() {
@@ -460,6 +458,8 @@ fn panda_table_birrt_race() {
     assert_eq!(paths[0], paths[1]);
 }
 
+/// Runs `make`'s planner on every MBM problem of the excerpt whose start and goals are valid
+/// in our (slightly padded) model; asserts at least one is solved.
 fn mbm<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P) {
     let set = ProblemSet::load(data("panda_table_pick.json")).unwrap();
     let mut solved = 0;
