@@ -499,6 +499,12 @@ fn bench_plan_writes_results_json() {
     assert_eq!(field(&a, "success"), field(&b, "success"));
     assert!(field(&a, "success").contains(&serde_json::json!(true)), "{a}");
     assert_eq!(field(&a, "path"), field(&b, "path"));
+    // No time limit at all (an infinite one) plans and smooths as usual.
+    let (_, v) = bench_json(
+        &["--only", "table_pick:1", "--time-limit", "inf", "--warm-up", "0"],
+        "unlimited.json",
+    );
+    assert_eq!(field(&v, "success"), vec![serde_json::json!(true)], "{v}");
     // `--only` picks one problem; a selector that matches nothing or a malformed id is an error.
     let (_, v) = bench_json(&["--only", "table_pick:41"], "only.json");
     assert_eq!(field(&v, "id"), vec![serde_json::json!(41)]);
@@ -622,12 +628,19 @@ fn bench_plan_writes_results_json() {
         "far.json",
     );
     let skipped = field(&v, "skipped");
+    // The reason names the value as 1e308, not as 309 digits.
     assert!(
-        skipped.iter().any(|s| s
-            .as_str()
-            .is_some_and(|s| s.contains("outside our model's limits: start"))),
+        skipped.iter().any(|s| s.as_str().is_some_and(|s| s
+            .contains("outside our model's limits: start")
+            && s.contains("is 1e308")
+            && s.len() < 200)),
         "{skipped:?}"
     );
+    // A results file that cannot be written fails the run before its first plan.
+    let unwritable = bench_plan(&["--json", "/nonexistent/dir/results.json"]);
+    let err = String::from_utf8_lossy(&unwritable.stderr);
+    assert!(!unwritable.status.success() && err.contains("writing /nonexistent/dir/results.json"), "{err}");
+    assert!(!err.contains("plans") && !err.contains("panicked"), "{err}");
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
         .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])
         .output()

@@ -101,3 +101,40 @@ impl PlanError {
 pub(crate) fn bad_state(what: &str, e: crate::space::SpaceError) -> PlanError {
     PlanError::BadInput(format!("{what}: {e}"))
 }
+
+/// A number in an error message: as Rust prints it when that is short, in scientific notation
+/// when it is huge or tiny (a coordinate of 10³⁰⁸ would otherwise print 309 digits).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Num(pub(crate) f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Num;
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        for (v, s) in [
+            (1e308, "1e308"),
+            (-2.5e-9, "-2.5e-9"),
+            (0.0, "0"),
+            (1.5, "1.5"),
+            (-3.0, "-3"),
+            (123456.0, "123456"),
+            (f64::INFINITY, "inf"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(Num(v).to_string(), s);
+        }
+    }
+}

@@ -347,6 +347,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.iterations == Some(0) {
         bail!("--iterations must be positive");
     }
+    // A results file that cannot be written is reported before any plan is run.
+    if let Some(path) = &a.json {
+        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
+    }
     if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
         bail!("--range must be positive");
     }
@@ -550,7 +554,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             &sol.path,
                             &rs.limits,
                             &settings,
-                            Duration::from_secs_f64(left),
+                            Duration::try_from_secs_f64(left).unwrap_or(Duration::MAX),
                             &mut rng,
                         );
                         row["shortcut_time_s"] = json!(t0.elapsed().as_secs_f64());
@@ -657,19 +661,27 @@ fn summarize(name: &str, rows: &[&Value]) -> Value {
     // No rate when nothing was attempted (every plan skipped).
     let rate = (!attempted.is_empty()).then(|| ok.len() as f64 / attempted.len() as f64);
     let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
+    // A column without successful plans (NaN) prints as "-".
+    let cell = |v: f64, digits: usize| {
+        if v.is_nan() {
+            "-".to_owned()
+        } else {
+            format!("{v:.digits$}")
+        }
+    };
     println!(
-        "{:<22} {:>6} {:>7} {:>9} {:>8} {:>11.3} {:>11.3} {:>9.3} {:>11.3} {:>9.3} {:>9.0}",
+        "{:<22} {:>6} {:>7} {:>9} {:>8} {:>11} {:>11} {:>9} {:>11} {:>9} {:>9}",
         name,
         rows.len(),
         rows.len() - attempted.len(),
         format!("{}/{}", ok.len(), attempted.len()),
         rate.map_or("-".to_owned(), |r| format!("{:.1}%", 100.0 * r)),
-        time_median,
-        time_p95,
-        length,
-        shortcut,
-        duration,
-        checks
+        cell(time_median, 3),
+        cell(time_p95, 3),
+        cell(length, 3),
+        cell(shortcut, 3),
+        cell(duration, 3),
+        cell(checks, 0)
     );
     json!({"plans": rows.len(), "skipped": rows.len() - attempted.len(), "solved": ok.len(), "attempted": attempted.len(),
            "success_rate": rate,

@@ -35,6 +35,8 @@ pub use se2::Se2Space;
 use std::f64::consts::PI;
 
 use hearth_kinematics::wrap_angle;
+
+use crate::error::Num;
 use rand::{Rng, RngExt};
 
 /// A configuration space: where planner states live and how far apart they are.
@@ -321,7 +323,7 @@ pub enum SpaceError {
         got: usize,
     },
     /// A coordinate of a state is NaN or infinite.
-    #[error("coordinate {index} ({name}) is {value}, not a finite number")]
+    #[error("coordinate {index} ({name}) is {v}, not a finite number", v = Num(*.value))]
     NotFinite {
         /// Index of the coordinate in the state.
         index: usize,
@@ -331,7 +333,7 @@ pub enum SpaceError {
         value: f64,
     },
     /// A coordinate of a state lies outside its bounds.
-    #[error("coordinate {index} ({name}) is {value}, outside its bounds [{lower}, {upper}]")]
+    #[error("coordinate {index} ({name}) is {v}, outside its bounds [{lo}, {hi}]", v = Num(*.value), lo = Num(*.lower), hi = Num(*.upper))]
     OutOfBounds {
         /// Index of the coordinate in the state.
         index: usize,
@@ -345,7 +347,7 @@ pub enum SpaceError {
         upper: f64,
     },
     /// A space was described with unusable bounds (NaN, infinite, or lower above upper).
-    #[error("coordinate {index} ({name}) has bounds [{lower}, {upper}]: {why}")]
+    #[error("coordinate {index} ({name}) has bounds [{lo}, {hi}]: {why}", lo = Num(*.lower), hi = Num(*.upper))]
     InvalidBounds {
         /// Index of the coordinate.
         index: usize,
@@ -359,7 +361,7 @@ pub enum SpaceError {
         why: &'static str,
     },
     /// A distance weight is negative, NaN or infinite.
-    #[error("weight of {what} is {value}; weights must be finite and non-negative")]
+    #[error("weight of {what} is {v}; weights must be finite and non-negative", v = Num(*.value))]
     InvalidWeight {
         /// Whose weight (a coordinate name, `yaw`, `first space`, …).
         what: String,
@@ -367,7 +369,7 @@ pub enum SpaceError {
         value: f64,
     },
     /// A velocity limit is not positive (NaN, zero or negative).
-    #[error("velocity limit of {name} is {value}; it must be positive (or +inf)")]
+    #[error("velocity limit of {name} is {v}; it must be positive (or +inf)", v = Num(*.value))]
     InvalidVelocityLimit {
         /// Name of the coordinate.
         name: String,

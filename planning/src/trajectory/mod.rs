@@ -32,6 +32,7 @@ use std::sync::Arc;
 
 pub use limits::Limits;
 
+use crate::error::Num;
 use crate::planner::{Path, positive, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
@@ -69,7 +70,7 @@ pub enum TrajectoryError {
     },
     /// A sampling step that is not positive and finite, or so small that sampling would not
     /// end in reasonable time (more than [`Trajectory::MAX_SAMPLES`] samples).
-    #[error("{what} is {value} s; it must be positive, finite and at least the duration / {max_samples}")]
+    #[error("{what} is {v} s; it must be positive, finite and at least the duration / {max_samples}", v = Num(*.value))]
     BadStep {
         /// Which step.
         what: &'static str,
@@ -79,7 +80,7 @@ pub enum TrajectoryError {
         max_samples: u64,
     },
     /// A limit that is not positive (or not finite, where that is required).
-    #[error("{what} limit {index} is {value}; it must be positive and finite")]
+    #[error("{what} limit {index} is {v}; it must be positive and finite", v = Num(*.value))]
     BadLimit {
         /// Which limit.
         what: &'static str,
@@ -91,7 +92,9 @@ pub enum TrajectoryError {
     /// Position bounds that no number satisfies, or NaN: a lower bound above its upper bound,
     /// a lower bound of `+∞` or an upper bound of `-∞`.
     #[error(
-        "position bounds of coordinate {index} are [{lower}, {upper}]; they must be numbers (or -∞ below, +∞ above) with lower ≤ upper"
+        "position bounds of coordinate {index} are [{lo}, {hi}]; they must be numbers (or -∞ below, +∞ above) with lower ≤ upper",
+        lo = Num(*.lower),
+        hi = Num(*.upper)
     )]
     BadPositionBounds {
         /// Coordinate.
@@ -109,7 +112,7 @@ pub enum TrajectoryError {
         index: usize,
     },
     /// A check resolution (a distance in the space) that is not positive and finite.
-    #[error("the check resolution is {value}; it must be positive and finite")]
+    #[error("the check resolution is {v}; it must be positive and finite", v = Num(*.value))]
     BadResolution {
         /// Its value.
         value: f64,
@@ -119,7 +122,11 @@ pub enum TrajectoryError {
     EmptyPath,
     /// Two motions joined where the first does not end at rest where the second starts.
     #[error(
-        "the motions do not meet at rest: coordinate {index} is {end} and {start}, velocities {v_end} and {v_start}"
+        "the motions do not meet at rest: coordinate {index} is {e} and {s}, velocities {ve} and {vs}",
+        e = Num(*.end),
+        s = Num(*.start),
+        ve = Num(*.v_end),
+        vs = Num(*.v_start)
     )]
     Discontinuous {
         /// Coordinate that differs.
@@ -134,7 +141,7 @@ pub enum TrajectoryError {
         v_start: f64,
     },
     /// A scaling factor outside `(0, 1]` (or NaN).
-    #[error("{what} is {value}; it must be in (0, 1]")]
+    #[error("{what} is {v}; it must be in (0, 1]", v = Num(*.value))]
     BadScale {
         /// Which factor (`velocity_scale`, `acceleration_scale`).
         what: &'static str,
