@@ -592,6 +592,14 @@ fn bench_plan_writes_results_json() {
             "set the escape that --no-escape turns off",
         ),
         (
+            &["--no-escape", "--escape-reset", "5"][..],
+            "set the escape that --no-escape turns off",
+        ),
+        (
+            &["--planner", "lazyprm", "--escape-reset", "5"][..],
+            "apply to --planner birrt only",
+        ),
+        (
             &["--connect", "onward", "--planner", "rrt"][..],
             "--connect applies to --planner birrt only",
         ),
@@ -630,16 +638,20 @@ fn bench_plan_writes_results_json() {
     let skipped = field(&v, "skipped");
     // The reason names the value as 1e308, not as 309 digits.
     assert!(
-        skipped.iter().any(|s| s.as_str().is_some_and(|s| s
-            .contains("outside our model's limits: start")
-            && s.contains("is 1e308")
-            && s.len() < 200)),
+        skipped.iter().any(|s| s
+            .as_str()
+            .is_some_and(|s| s.contains("outside our model's limits: start")
+                && s.contains("is 1e308")
+                && s.len() < 200)),
         "{skipped:?}"
     );
     // A results file that cannot be written fails the run before its first plan.
     let unwritable = bench_plan(&["--json", "/nonexistent/dir/results.json"]);
     let err = String::from_utf8_lossy(&unwritable.stderr);
-    assert!(!unwritable.status.success() && err.contains("writing /nonexistent/dir/results.json"), "{err}");
+    assert!(
+        !unwritable.status.success() && err.contains("writing /nonexistent/dir/results.json"),
+        "{err}"
+    );
     assert!(!err.contains("plans") && !err.contains("panicked"), "{err}");
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
         .args(["bench", "plan", "--problems", "/nonexistent/problems.json"])

@@ -190,7 +190,8 @@ impl Default for DynamicDomain {
 /// branch and the new state join the tree, which goes on as before from outside the pocket;
 /// else a step of `step × range` grows the helper. The helper's short steps never become the
 /// tree's own states otherwise, so states inside the pocket do not become the
-/// nearest neighbours of later samples.
+/// nearest neighbours of later samples. A helper that has not grown for `reset` of its turns
+/// is replaced by a fresh one.
 ///
 /// ```
 /// let e = hearth_planning::birrt::Escape::default();
@@ -219,6 +220,13 @@ pub struct Escape {
     /// of its mean eigenvalue), which squashes the directions the pocket leaves no room in.
     /// 0 turns the channel off: every helper turn steers straight at its sample.
     pub probe: f64,
+    /// Helper turns without growth (no new helper state, nothing joined to the tree) after
+    /// which the helper is dropped, and the next helper turn starts a new one from the
+    /// tree's roots with an empty channel. A helper can wall itself in: its frontier ends in a
+    /// cul-de-sac of the pocket, whose states stay the nearest to every sample, while the way
+    /// out starts near the roots. A fresh helper draws its first steps anew. `u64::MAX`
+    /// keeps a helper for the whole plan.
+    pub reset: u64,
 }
 
 impl Default for Escape {
@@ -230,6 +238,7 @@ impl Default for Escape {
             step: 0.25,
             join: 0.5,
             probe: 0.5,
+            reset: 20_000,
         }
     }
 }
@@ -240,6 +249,8 @@ struct Helper {
     tree: Tree,
     joined: Vec<Option<usize>>,
     channel: Channel,
+    /// Helper turns since it last grew or joined its tree.
+    idle: u64,
 }
 
 /// Directions recently found free by a helper's probes: the shape of the channel a wedged
@@ -360,6 +371,7 @@ impl Helper {
             tree,
             joined: (0..roots).map(Some).collect(),
             channel: Channel::new(dim),
+            idle: 0,
         }
     }
 
@@ -590,10 +602,11 @@ impl<S: Space> Planner<S> for BiRrt {
                     && e.step <= e.join
                     && e.join <= 1.0
                     && (0.0..1.0).contains(&e.probe)
-                    && e.stuck_ratio > 0)
+                    && e.stuck_ratio > 0
+                    && e.reset > 0)
                 {
                     return Err(PlanError::BadInput(format!(
-                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, probe in [0, 1), stuck_ratio positive"
+                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, probe in [0, 1), stuck_ratio and reset positive"
                     )));
                 }
                 Some(e)
@@ -638,6 +651,12 @@ impl<S: Space> Planner<S> for BiRrt {
             attempts[grow] += 1;
             let [t0, t1] = &mut trees;
             let (this, other) = if grow == 0 { (t0, t1) } else { (t1, t0) };
+            // A helper that stopped growing is dropped ([`Escape::reset`]).
+            if let Some(e) = escape
+                && helpers[grow].as_ref().is_some_and(|h| h.idle >= e.reset)
+            {
+                helpers[grow] = None;
+            }
             let helper = match escape {
                 Some(e)
                     if attempts[grow] >= e.after
@@ -654,7 +673,8 @@ impl<S: Space> Planner<S> for BiRrt {
             let extended = match helper {
                 Some((h, e)) => {
                     let probe = (e.probe > 0.0 && rng.random::<f64>() < e.probe).then(|| e.step * range / 3.0);
-                    stepper.escape(
+                    let before = h.tree.len();
+                    let out = stepper.escape(
                         motion,
                         validator,
                         this,
@@ -662,7 +682,13 @@ impl<S: Space> Planner<S> for BiRrt {
                         &target,
                         (e.step * range, e.join * range, probe),
                         &mut chain,
-                    )
+                    );
+                    if out.is_some() || h.tree.len() > before {
+                        h.idle = 0;
+                    } else {
+                        h.idle += 1;
+                    }
+                    out
                 }
                 None => stepper.extend(motion, validator, this, &target),
             };

@@ -112,6 +112,11 @@ pub struct BenchPlanArgs {
     /// When absent: the planner's default.
     #[arg(long)]
     escape_share: Option<f64>,
+    /// BiRRT only: helper turns without growth after which an escape helper is replaced by a
+    /// fresh one (`Escape::reset`; 0 keeps every helper for the whole plan). When absent: the
+    /// planner's default.
+    #[arg(long)]
+    escape_reset: Option<u64>,
     /// BiRRT only: which tree grows along the line joining the trees after an extension:
     /// `other` (the other tree, as OMPL's RRTConnect) or `onward` (the tree that just grew, as
     /// VAMP's). When absent: `other`, which solved more of the Fetch's hardest problems and
@@ -199,6 +204,11 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
             Escape {
                 probe: a.escape_probe.unwrap_or(e.probe),
                 share: a.escape_share.unwrap_or(e.share),
+                reset: match a.escape_reset {
+                    Some(0) => u64::MAX,
+                    Some(n) => n,
+                    None => e.reset,
+                },
                 ..e
             }
         }),
@@ -363,8 +373,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.dynamic_domain.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--dynamic-domain applies to --planner birrt only");
     }
-    if (a.no_escape || a.escape_probe.is_some() || a.escape_share.is_some()) && a.planner != PlannerKind::Birrt {
-        bail!("--no-escape, --escape-probe and --escape-share apply to --planner birrt only");
+    let tunes_escape = a.escape_probe.is_some() || a.escape_share.is_some() || a.escape_reset.is_some();
+    if (a.no_escape || tunes_escape) && a.planner != PlannerKind::Birrt {
+        bail!("--no-escape, --escape-probe, --escape-share and --escape-reset apply to --planner birrt only");
     }
     if a.escape_probe.is_some_and(|p| !(0.0..1.0).contains(&p)) {
         bail!("--escape-probe must be in [0, 1)");
@@ -372,8 +383,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.escape_share.is_some_and(|s| !(s > 0.0 && s < 1.0)) {
         bail!("--escape-share must be in (0, 1)");
     }
-    if a.no_escape && (a.escape_probe.is_some() || a.escape_share.is_some()) {
-        bail!("--escape-probe and --escape-share set the escape that --no-escape turns off");
+    if a.no_escape && tunes_escape {
+        bail!("--escape-probe, --escape-share and --escape-reset set the escape that --no-escape turns off");
     }
     if a.connect.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--connect applies to --planner birrt only");
