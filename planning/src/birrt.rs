@@ -197,6 +197,7 @@ impl Default for DynamicDomain {
 /// let e = hearth_planning::birrt::Escape::default();
 /// assert!(e.step < 1.0 && e.share > 0.0 && e.share < 1.0);
 /// assert!(e.probe > 0.0 && e.probe < 1.0);
+/// assert!(e.reset > 0 && e.reset < u64::MAX); // helpers that stop growing are replaced
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
