@@ -468,6 +468,8 @@ impl Stepper {
             .nn
             .nearest(motion.space(), target)
             .expect("helpers are never empty");
+        // Counted back to 0 below when the helper grows or joins its tree.
+        helper.idle += 1;
         if let Some(p) = probe {
             if self.try_step(motion, validator, helper.tree.state(near), target, p) {
                 helper
@@ -482,10 +484,12 @@ impl Stepper {
             target
         };
         if self.try_step(motion, validator, helper.tree.state(near), aim, long) {
+            helper.idle = 0;
             let at = helper.join(near, grown, chain);
             return Some(grown.add(&self.step, Some(at)));
         }
         if self.try_step(motion, validator, helper.tree.state(near), aim, short) {
+            helper.idle = 0;
             helper.tree.add(&self.step, Some(near));
             helper.joined.push(None);
         }
@@ -674,8 +678,7 @@ impl<S: Space> Planner<S> for BiRrt {
             let extended = match helper {
                 Some((h, e)) => {
                     let probe = (e.probe > 0.0 && rng.random::<f64>() < e.probe).then(|| e.step * range / 3.0);
-                    let before = h.tree.len();
-                    let out = stepper.escape(
+                    stepper.escape(
                         motion,
                         validator,
                         this,
@@ -683,13 +686,7 @@ impl<S: Space> Planner<S> for BiRrt {
                         &target,
                         (e.step * range, e.join * range, probe),
                         &mut chain,
-                    );
-                    if out.is_some() || h.tree.len() > before {
-                        h.idle = 0;
-                    } else {
-                        h.idle += 1;
-                    }
-                    out
+                    )
                 }
                 None => stepper.extend(motion, validator, this, &target),
             };

@@ -357,10 +357,6 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.iterations == Some(0) {
         bail!("--iterations must be positive");
     }
-    // A results file that cannot be written is reported before any plan is run.
-    if let Some(path) = &a.json {
-        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
-    }
     if a.range.is_some_and(|r| r.is_nan() || r <= 0.0) {
         bail!("--range must be positive");
     }
@@ -417,6 +413,11 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 id.map(|i| format!(":{i}")).unwrap_or_default()
             );
         }
+    }
+    // A results file that cannot be written is reported before any plan is run (and after
+    // every other input was checked, so that bad input leaves no file behind).
+    if let Some(path) = &a.json {
+        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
     }
     let total: usize = sets.iter().map(|(s, _)| s.problems.len()).sum::<usize>() * a.repeat as usize;
     let mut setups: BTreeMap<String, RobotSetup> = BTreeMap::new();
