@@ -390,6 +390,9 @@ impl ObstacleSpec {
             .name()
             .map_or_else(|| format!("{}{index}", self.kind()), str::to_owned);
         let v = |a: [f64; 3]| Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
+        // A size of -0 (which validation lets through: it is not below 0) becomes +0, the
+        // sign parry's shapes require.
+        let size = |x: f64| x as f32 + 0.0;
         let pose = |c: [f64; 3], q: [f64; 4]| {
             let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
             let n = if n > 0.0 { n } else { 1.0 };
@@ -407,15 +410,15 @@ impl ObstacleSpec {
                 half_extents,
                 quat_xyzw,
                 ..
-            } => Obstacle::cuboid(name, pose(*center, *quat_xyzw), v(*half_extents)),
-            Self::Sphere { center, radius, .. } => Obstacle::ball(name, v(*center), *radius as f32),
+            } => Obstacle::cuboid(name, pose(*center, *quat_xyzw), v(half_extents.map(|x| x + 0.0))),
+            Self::Sphere { center, radius, .. } => Obstacle::ball(name, v(*center), size(*radius)),
             Self::Cylinder {
                 center,
                 radius,
                 half_length,
                 quat_xyzw,
                 ..
-            } => Obstacle::cylinder(name, pose(*center, *quat_xyzw), *half_length as f32, *radius as f32),
+            } => Obstacle::cylinder(name, pose(*center, *quat_xyzw), size(*half_length), size(*radius)),
         }
     }
 }
@@ -1023,6 +1026,11 @@ impl Ctx<'_> {
         let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
         if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
             return Err(self.err(field, Defect::NotUnitQuaternion(norm)));
+        }
+        // A quaternion already normalised stays as it is, so that a set written and read
+        // again is the same set (dividing by a norm one ulp off 1 would move its last bits).
+        if (norm - 1.0).abs() <= 8.0 * f64::EPSILON {
+            return Ok(q);
         }
         Ok(q.map(|x| x / norm))
     }

@@ -183,3 +183,18 @@ proptest! {
         }
     }
 }
+
+/// Sizes of -0 are not negative: they load, and make obstacles (parry refuses a sign bit on a
+/// size); a quaternion a little off unit length is normalised once, so the set survives being
+/// written and read again.
+#[test]
+fn negative_zero_sizes_and_nearly_unit_quaternions_load_and_round_trip() {
+    let text = r#"{"robot": "toy", "family": "unit", "joint_names": ["j1"],
+      "problems": [{"id": 1, "valid": true, "obstacles": [
+        {"kind": "cylinder", "center": [0, 0, 0], "radius": -0.0, "half_length": -0.0, "quat_xyzw": [0, 0, 0.9960494029650668, -0.08895937776906854]},
+        {"kind": "box", "center": [1, 0, 0], "half_extents": [-0.0, 0.1, 0.1], "quat_xyzw": [0, 0, 0, 1]},
+        {"kind": "sphere", "center": [2, 0, 0], "radius": -0.0}],
+      "start": [0], "goals": [[1]]}]}"#;
+    let set = ProblemSet::from_json_str(text).unwrap();
+    assert_eq!(usable(&set), Ok(()));
+}
