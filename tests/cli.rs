@@ -560,6 +560,19 @@ fn bench_plan_writes_results_json() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && err.contains(says), "{extra:?}: {err}");
     }
+    // LazyPRM takes the pocket escape's flags.
+    let o = bench_plan(&[
+        "--planner",
+        "lazyprm",
+        "--no-escape",
+        "--only",
+        "table_pick:1",
+        "--warm-up",
+        "0",
+        "--shortcut",
+        "none",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for (extra, says) in [
         (&["--only", "table_pick:7"][..], "no such problem"),
         (&["--only", "bookshelf"][..], "no such problem"),
@@ -571,8 +584,8 @@ fn bench_plan_writes_results_json() {
             "--goal-zone must be in [0, 0.95]",
         ),
         (
-            &["--no-escape", "--planner", "lazyprm"][..],
-            "apply to --planner birrt only",
+            &["--no-escape", "--planner", "rrt"][..],
+            "apply to --planner birrt and lazyprm only",
         ),
         (&["--escape-probe", "1"][..], "--escape-probe must be in [0, 1)"),
         (&["--iterations", "0"][..], "--iterations must be positive"),
@@ -596,8 +609,8 @@ fn bench_plan_writes_results_json() {
             "set the escape that --no-escape turns off",
         ),
         (
-            &["--planner", "lazyprm", "--escape-reset", "5"][..],
-            "apply to --planner birrt only",
+            &["--planner", "rrt", "--escape-reset", "5"][..],
+            "apply to --planner birrt and lazyprm only",
         ),
         (
             &["--connect", "onward", "--planner", "rrt"][..],

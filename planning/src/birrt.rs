@@ -4,9 +4,11 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
+pub use crate::escape::Escape;
+use crate::escape::{Grows, Helper, try_step};
 use crate::motion::MotionValidator;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, Tree, resolve_range, valid_goals};
-use crate::space::{Space, steer};
+use crate::space::Space;
 use crate::validity::StateValidator;
 
 /// RRT-Connect: a tree from the start and a tree from the goals (seeded with every valid goal),
@@ -174,228 +176,6 @@ impl Default for DynamicDomain {
     }
 }
 
-/// Settings of the pocket escape of [`BiRrt`].
-///
-/// A goal wedged among obstacles (a gripper between two cans on a shelf) can leave almost no
-/// straight step of the full `range` free: its tree then stays at its roots for hundreds of
-/// thousands of tries, while shorter steps would find the way out. Once a tree has grown by
-/// fewer than one state per `stuck_ratio` extension attempts (after at least `after`
-/// attempts), a share `share` of its turns goes to a helper tree rooted at its roots and
-/// grown with steps of `step × range`. A share `probe` of the helper's turns are probes: a
-/// step of a third of the helper's step from the helper state nearest the sample towards it,
-/// whose direction the helper remembers when it is free. The recent free directions give the
-/// shape of the pocket's way out (the helper's channel, see [`probe`](Escape::probe)). The
-/// other helper turns steer from the helper state nearest the sample towards the sample bent
-/// by that shape, and first try a step of `join × range`: when that succeeds, the helper's
-/// branch and the new state join the tree, which goes on as before from outside the pocket;
-/// else a step of `step × range` grows the helper. The helper's short steps never become the
-/// tree's own states otherwise, so states inside the pocket do not become the
-/// nearest neighbours of later samples. A helper that has not grown for `reset` of its turns
-/// is replaced by a fresh one.
-///
-/// ```
-/// let e = hearth_planning::birrt::Escape::default();
-/// assert!(e.step < 1.0 && e.share > 0.0 && e.share < 1.0);
-/// assert!(e.probe > 0.0 && e.probe < 1.0);
-/// assert!(e.reset > 0 && e.reset < u64::MAX); // helpers that stop growing are replaced
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Escape {
-    /// Extension attempts on a tree before it can count as stuck.
-    pub after: u64,
-    /// A tree is stuck while it has grown by fewer than one state per this many attempts.
-    pub stuck_ratio: u64,
-    /// Share of a stuck tree's turns given to its helper tree, in (0, 1).
-    pub share: f64,
-    /// The helper tree's step, as a fraction of the planner's step, in (0, 1].
-    pub step: f64,
-    /// The step that lets a helper state join the tree, as a fraction of the planner's step,
-    /// in [`step`](Escape::step), 1].
-    pub join: f64,
-    /// Share of the helper's turns, in [0, 1), spent on probes: steps of a third of the
-    /// helper's step towards the sample (a uniformly random direction), which teach the
-    /// helper which directions are free near its frontier. Once eight probes were free, the
-    /// other turns steer through the learnt channel: the displacement to the sample is
-    /// multiplied by the second moment of the last 32 free probe directions (plus a twentieth
-    /// of its mean eigenvalue), which squashes the directions the pocket leaves no room in.
-    /// 0 turns the channel off: every helper turn steers straight at its sample.
-    pub probe: f64,
-    /// Helper turns without growth (no new helper state, nothing joined to the tree) after
-    /// which the helper is dropped, and the next helper turn starts a new one from the
-    /// tree's roots with an empty channel. A helper can wall itself in: its frontier ends in a
-    /// cul-de-sac of the pocket, whose states stay the nearest to every sample, while the way
-    /// out starts near the roots. A fresh helper draws its first steps anew. `u64::MAX`
-    /// keeps a helper for the whole plan.
-    pub reset: u64,
-}
-
-impl Default for Escape {
-    fn default() -> Self {
-        Self {
-            after: 10_000,
-            stuck_ratio: 2_000,
-            share: 0.5,
-            step: 0.25,
-            join: 0.5,
-            probe: 0.5,
-            reset: 20_000,
-        }
-    }
-}
-
-/// A stuck tree's helper ([`Escape`]): short steps from the tree's roots, and for each helper
-/// state the tree state it became, once it joined the tree.
-struct Helper {
-    tree: Tree,
-    joined: Vec<Option<usize>>,
-    channel: Channel,
-    /// Helper turns since it last grew or joined its tree.
-    idle: u64,
-}
-
-/// Directions recently found free by a helper's probes: the shape of the channel a wedged
-/// tree has to leave through.
-///
-/// A goal wedged between shelf boards leaves free motions that are long in some directions
-/// and very short in others: at the Fetch's eleven hardest MotionBenchMaker goals the second
-/// moment of the free 0.1 rad steps' directions has two eigenvalues of 0.003–0.03, against
-/// 0.06–0.27 for the other six. Steering towards a sample through that second moment (the
-/// displacement multiplied by it, so the thin directions are squashed) makes 6–17× more
-/// 0.3 rad steps from those goals free than steering straight at the sample
-/// (`docs/planning-log.md`, fifteenth round). This is principal-component analysis of the local free space, as in
-/// Dalibard & Laumond's PCA-guided RRT ("Control of probabilistic diffusion in motion
-/// planning", WAFR 2008), learnt here from short probes rather than from the tree's states. The memory is short ([`CHANNEL_MEMORY`] directions), so the shape follows the
-/// helper's frontier as the channel turns.
-struct Channel {
-    dim: usize,
-    /// Ring of unit directions, `CHANNEL_MEMORY × dim`.
-    dirs: Vec<f64>,
-    /// Directions held (at most `CHANNEL_MEMORY`) and the next slot to write.
-    held: usize,
-    next: usize,
-    /// Sum of the held directions' outer products, `dim × dim`.
-    moment: Vec<f64>,
-    /// Scratch: a displacement, its shaped image, and the shaped target.
-    delta: Vec<f64>,
-    shaped: Vec<f64>,
-    target: Vec<f64>,
-}
-
-/// Euclidean length of a displacement.
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// Free directions a [`Channel`] remembers.
-const CHANNEL_MEMORY: usize = 32;
-/// Free directions a [`Channel`] needs before it shapes steps.
-const CHANNEL_READY: usize = 8;
-/// Share of the mean eigenvalue added to every direction of a channel's shape, so that no
-/// direction is shut off entirely.
-const CHANNEL_FLOOR: f64 = 0.05;
-
-impl Channel {
-    fn new(dim: usize) -> Self {
-        Self {
-            dim,
-            dirs: vec![0.0; CHANNEL_MEMORY * dim],
-            held: 0,
-            next: 0,
-            moment: vec![0.0; dim * dim],
-            delta: vec![0.0; dim],
-            shaped: vec![0.0; dim],
-            target: vec![0.0; dim],
-        }
-    }
-
-    /// Remembers the direction from `from` to `to` (a free motion), forgetting the oldest.
-    fn record<S: Space>(&mut self, space: &S, from: &[f64], to: &[f64]) {
-        let d = self.dim;
-        space.difference(from, to, &mut self.delta);
-        let length = norm(&self.delta);
-        if !(length > 0.0 && length.is_finite()) {
-            return;
-        }
-        let slot = &mut self.dirs[self.next * d..][..d];
-        for (s, x) in slot.iter_mut().zip(&self.delta) {
-            *s = x / length;
-        }
-        self.next = (self.next + 1) % CHANNEL_MEMORY;
-        self.held = (self.held + 1).min(CHANNEL_MEMORY);
-        // Recomputed from the held directions (rare: once per free probe), so no rounding
-        // drifts in from forgotten ones.
-        self.moment.fill(0.0);
-        for u in self.dirs.chunks_exact(d).take(self.held) {
-            for i in 0..d {
-                for j in 0..d {
-                    self.moment[i * d + j] += u[i] * u[j];
-                }
-            }
-        }
-    }
-
-    fn ready(&self) -> bool {
-        self.held >= CHANNEL_READY
-    }
-
-    /// A target as far from `from` as `target` is, in the direction of `target`'s
-    /// displacement multiplied by the channel's shape (its second moment with a floor of
-    /// [`CHANNEL_FLOOR`]), within the bounds.
-    fn shape<S: Space>(&mut self, space: &S, from: &[f64], target: &[f64]) -> &[f64] {
-        let d = self.dim;
-        space.difference(from, target, &mut self.delta);
-        let trace: f64 = (0..d).map(|i| self.moment[i * d + i]).sum();
-        let floor = CHANNEL_FLOOR * trace / d as f64;
-        for i in 0..d {
-            let row = &self.moment[i * d..][..d];
-            self.shaped[i] = row.iter().zip(&self.delta).map(|(m, x)| m * x).sum::<f64>() + floor * self.delta[i];
-        }
-        let scale = norm(&self.delta) / norm(&self.shaped);
-        let scale = if scale.is_finite() { scale } else { 0.0 };
-        for ((o, f), s) in self.target.iter_mut().zip(from).zip(&self.shaped) {
-            *o = f + s * scale;
-        }
-        space.enforce_bounds(&mut self.target);
-        &self.target
-    }
-}
-
-impl Helper {
-    /// Rooted at the first `roots` states of `grown` (its roots, added first).
-    fn new(grown: &Grown, roots: usize, dim: usize) -> Self {
-        let mut tree = Tree::new(dim);
-        for r in 0..roots {
-            tree.add(grown.tree.state(r), None);
-        }
-        Self {
-            tree,
-            joined: (0..roots).map(Some).collect(),
-            channel: Channel::new(dim),
-            idle: 0,
-        }
-    }
-
-    /// Adds helper state `h`'s branch to `grown` where it is not there yet; returns the tree
-    /// index of `h`.
-    fn join(&mut self, h: usize, grown: &mut Grown, chain: &mut Vec<usize>) -> usize {
-        chain.clear();
-        let mut at = h;
-        let mut above = loop {
-            if let Some(t) = self.joined[at] {
-                break t;
-            }
-            chain.push(at);
-            at = self.tree.parent(at).expect("helper roots have joined");
-        };
-        for &k in chain.iter().rev() {
-            above = grown.add(self.tree.state(k), Some(above));
-            self.joined[k] = Some(above);
-        }
-        above
-    }
-}
-
 /// [`BiRrt`]'s default step as a fraction of [`default_range`](crate::planner::default_range).
 const BIRRT_RANGE_SCALE: f64 = 0.1;
 
@@ -423,6 +203,12 @@ impl Grown {
     }
 }
 
+impl Grows for Grown {
+    fn grow<S: Space>(&mut self, _: &S, q: &[f64], parent: usize) -> usize {
+        self.add(q, Some(parent))
+    }
+}
+
 /// Scratch buffers and settings shared by the extension steps.
 struct Stepper {
     range: f64,
@@ -443,57 +229,7 @@ impl Stepper {
         target: &[f64],
         range: f64,
     ) -> bool {
-        steer(motion.space(), from, target, range, &mut self.step);
-        validator.is_valid(&self.step) && motion.check_motion(validator, from, &self.step)
-    }
-
-    /// A helper turn of a stuck tree ([`Escape`]) from the helper state nearest `target`:
-    /// either a `probe` step in the sample's direction that teaches the helper's [`Channel`]
-    /// when it is free, or, with the target shaped by the channel once it has learnt enough,
-    /// a `long` step, which joins the tree with its branch when valid (returns its tree
-    /// index), else a `short` step that grows the helper.
-    #[allow(clippy::too_many_arguments)]
-    fn escape<S: Space, V: StateValidator + ?Sized>(
-        &mut self,
-        motion: &mut MotionValidator<S>,
-        validator: &mut V,
-        grown: &mut Grown,
-        helper: &mut Helper,
-        target: &[f64],
-        (short, long, probe): (f64, f64, Option<f64>),
-        chain: &mut Vec<usize>,
-    ) -> Option<usize> {
-        let near = helper
-            .tree
-            .nn
-            .nearest(motion.space(), target)
-            .expect("helpers are never empty");
-        // Counted back to 0 below when the helper grows or joins its tree.
-        helper.idle += 1;
-        if let Some(p) = probe {
-            if self.try_step(motion, validator, helper.tree.state(near), target, p) {
-                helper
-                    .channel
-                    .record(motion.space(), helper.tree.state(near), &self.step);
-            }
-            return None;
-        }
-        let aim: &[f64] = if helper.channel.ready() {
-            helper.channel.shape(motion.space(), helper.tree.state(near), target)
-        } else {
-            target
-        };
-        if self.try_step(motion, validator, helper.tree.state(near), aim, long) {
-            helper.idle = 0;
-            let at = helper.join(near, grown, chain);
-            return Some(grown.add(&self.step, Some(at)));
-        }
-        if self.try_step(motion, validator, helper.tree.state(near), aim, short) {
-            helper.idle = 0;
-            helper.tree.add(&self.step, Some(near));
-            helper.joined.push(None);
-        }
-        None
+        try_step(motion, validator, from, target, range, &mut self.step)
     }
 
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
@@ -598,25 +334,10 @@ impl<S: Space> Planner<S> for BiRrt {
                 Some((dd.radius * range, dd.min_radius.min(dd.radius) * range, dd.alpha))
             }
         };
-        let escape = match self.escape {
-            None => None,
-            Some(e) => {
-                if !(e.share > 0.0
-                    && e.share < 1.0
-                    && e.step > 0.0
-                    && e.step <= e.join
-                    && e.join <= 1.0
-                    && (0.0..1.0).contains(&e.probe)
-                    && e.stuck_ratio > 0
-                    && e.reset > 0)
-                {
-                    return Err(PlanError::BadInput(format!(
-                        "escape {e:?}: share must be in (0, 1), 0 < step ≤ join ≤ 1, probe in [0, 1), stuck_ratio and reset positive"
-                    )));
-                }
-                Some(e)
-            }
-        };
+        if let Some(e) = &self.escape {
+            e.validate()?;
+        }
+        let escape = self.escape;
         let goals = valid_goals(space, validator, request)?;
         let dim = space.dim();
         // trees[0] grows from the start, trees[1] from the goals.
@@ -634,7 +355,6 @@ impl<S: Space> Planner<S> for BiRrt {
         let roots = [1, goals.len()];
         let mut attempts = [0u64; 2];
         let mut helpers: [Option<Helper>; 2] = [None, None];
-        let mut chain = Vec::new();
         let mut target = request.start.clone();
         // Try connecting the goal tree straight to the start first.
         let mut joined = stepper
@@ -658,35 +378,24 @@ impl<S: Space> Planner<S> for BiRrt {
             let (this, other) = if grow == 0 { (t0, t1) } else { (t1, t0) };
             // A helper that stopped growing is dropped ([`Escape::reset`]).
             if let Some(e) = escape
-                && helpers[grow].as_ref().is_some_and(|h| h.idle >= e.reset)
+                && helpers[grow].as_ref().is_some_and(|h| h.idle() >= e.reset)
             {
                 helpers[grow] = None;
             }
             let helper = match escape {
                 Some(e)
-                    if attempts[grow] >= e.after
-                        && ((this.len() - roots[grow]) as u64).saturating_mul(e.stuck_ratio) < attempts[grow]
-                        && rng.random::<f64>() < e.share =>
+                    if e.stuck(attempts[grow], (this.len() - roots[grow]) as u64) && rng.random::<f64>() < e.share =>
                 {
-                    Some((
-                        helpers[grow].get_or_insert_with(|| Helper::new(this, roots[grow], dim)),
-                        e,
-                    ))
+                    let h = helpers[grow]
+                        .get_or_insert_with(|| Helper::new((0..roots[grow]).map(|r| (r, this.tree.state(r))), dim));
+                    Some((h, e))
                 }
                 _ => None,
             };
             let extended = match helper {
                 Some((h, e)) => {
-                    let probe = (e.probe > 0.0 && rng.random::<f64>() < e.probe).then(|| e.step * range / 3.0);
-                    stepper.escape(
-                        motion,
-                        validator,
-                        this,
-                        h,
-                        &target,
-                        (e.step * range, e.join * range, probe),
-                        &mut chain,
-                    )
+                    let steps = e.steps(range, rng);
+                    h.turn(motion, validator, this, &target, steps)
                 }
                 None => stepper.extend(motion, validator, this, &target),
             };
@@ -722,42 +431,5 @@ impl<S: Space> Planner<S> for BiRrt {
             path: Path { states },
             stats,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::space::JointSpace;
-
-    /// A channel that has only seen free directions in the x-y plane steers a target off that
-    /// plane back into it (up to the floor), keeps the displacement's length and stays in
-    /// the bounds; it forgets all but its last `CHANNEL_MEMORY` directions.
-    #[test]
-    fn a_channel_squashes_the_directions_it_never_saw_free() {
-        let space = JointSpace::new(&[-2.0; 3], &[2.0; 3], &[false; 3]).unwrap();
-        let mut channel = Channel::new(3);
-        let origin = [0.0; 3];
-        for k in 0..CHANNEL_READY {
-            assert!(!channel.ready());
-            let a = k as f64 * 0.7;
-            channel.record(&space, &origin, &[a.cos() * 0.1, a.sin() * 0.1, 0.0]);
-        }
-        assert!(channel.ready());
-        let out = channel.shape(&space, &origin, &[0.5, 0.5, 0.5]).to_vec();
-        assert!((norm(&out) - norm(&[0.5; 3])).abs() < 1e-12, "{out:?}");
-        // The floor leaves z a twentieth or so of what x and y get.
-        assert!(out[2] > 0.0 && out[2] < 0.1 * out[0].min(out[1]), "{out:?}");
-        // Clamped into the bounds.
-        assert_eq!(channel.shape(&space, &[1.9, 0.0, 0.0], &[10.0, 0.0, 0.0])[0], 2.0);
-        // Directions along z, recorded past the memory, replace the x-y ones entirely.
-        for _ in 0..CHANNEL_MEMORY {
-            channel.record(&space, &origin, &[0.0, 0.0, -0.2]);
-        }
-        let out = channel.shape(&space, &origin, &[0.5, 0.5, 0.5]);
-        assert!(out[2] > 0.8 && out[0] < 0.1 * out[2], "{out:?}");
-        // A zero displacement is not a direction.
-        channel.record(&space, &origin, &origin);
-        assert_eq!(channel.held, CHANNEL_MEMORY);
     }
 }

@@ -7,6 +7,7 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
+use crate::escape::{Escape, Grows, Helper};
 use crate::motion::MotionValidator;
 use crate::nn::NearestNeighbors;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, resolve_range, valid_goals};
@@ -64,6 +65,13 @@ pub struct LazyPrmSettings {
     pub tree_share: f64,
     /// Step of the wedged-end growth as a fraction of `range` (default 0.25).
     pub tree_step: f64,
+    /// The pocket escape for a wedged query end ([`Escape`], as [`BiRrt`](crate::BiRrt)'s):
+    /// once that end's growth turns add fewer than one vertex per `stuck_ratio` turns, a share
+    /// of them goes to a helper tree of short steps, steered through the free directions its
+    /// probes find, whose branch joins the roadmap as valid edges once a longer step from it
+    /// is free. Step lengths are fractions of the growth's step (`tree_step` × `range`).
+    /// `None` turns it off.
+    pub escape: Option<Escape>,
 }
 
 impl Default for LazyPrmSettings {
@@ -77,6 +85,7 @@ impl Default for LazyPrmSettings {
             search_weight: 1.5,
             tree_share: 0.9,
             tree_step: 0.25,
+            escape: Some(Escape::default()),
         }
     }
 }
@@ -91,7 +100,9 @@ impl Default for LazyPrmSettings {
 /// A query end that stays cut off in a small part of a large roadmap (a grasp between shelf
 /// boards) is *wedged*: most of each batch then grows that part like an RRT tree, in steps
 /// checked at once ([`LazyPrmSettings::tree_share`]), until its new vertices' lazy edges reach
-/// the rest of the roadmap.
+/// the rest of the roadmap. A part that barely grows even so (no step of that length leaves
+/// its pocket) gets [`BiRrt`](crate::BiRrt)'s pocket escape: a helper tree of shorter steps
+/// ([`LazyPrmSettings::escape`]).
 ///
 /// Vertices are checked when sampled, unlike Bohlin & Kavraki's fully lazy original: one
 /// state check costs about a microsecond here, far less than the neighbour query and the
@@ -168,6 +179,8 @@ struct Roadmap {
     near: Vec<usize>,
     /// The start's and the goals' parts of the roadmap while they are wedged (empty when not).
     wedged: [Vec<u32>; 2],
+    /// An index of each wedged part's states (its ids are positions in `wedged[side]`).
+    wedged_nn: [NearestNeighbors; 2],
     /// Breadth-first search stamps: a vertex was reached in the walk numbered `walk`.
     seen: Vec<u32>,
     walk: u32,
@@ -175,6 +188,21 @@ struct Roadmap {
 
 /// How many failure points node enhancement remembers.
 const MAX_FAILURES: usize = 512;
+
+/// A wedged query end's part of the roadmap, as what an escape helper's branch joins.
+struct WedgedEnd<'a> {
+    roadmap: &'a mut Roadmap,
+    side: usize,
+    k: usize,
+    range: f64,
+}
+
+impl Grows for WedgedEnd<'_> {
+    fn grow<S: Space>(&mut self, space: &S, q: &[f64], parent: usize) -> usize {
+        self.roadmap
+            .add_reached(space, self.side, parent as u32, q, self.k, self.range) as usize
+    }
+}
 
 impl LazyPrm {
     /// A planner with these settings and an empty roadmap.
@@ -283,6 +311,7 @@ impl Roadmap {
             edges_added: 0,
             near: Vec::new(),
             wedged: [Vec::new(), Vec::new()],
+            wedged_nn: [NearestNeighbors::new(dim), NearestNeighbors::new(dim)],
             seen: Vec::new(),
             walk: 0,
         }
@@ -318,27 +347,30 @@ impl Roadmap {
         if part.len() > limit {
             part.clear();
         }
+        let index = &mut self.wedged_nn[side];
+        index.clear();
+        for &v in part.iter() {
+            index.insert(self.nn.state(v as usize));
+        }
         !part.is_empty()
     }
 
-    /// The vertex of `wedged[side]` nearest `target` (the part is not empty).
-    fn nearest_wedged<S: Space>(&self, space: &S, side: usize, target: &[f64]) -> u32 {
-        let mut best = (f64::INFINITY, self.wedged[side][0]);
-        for &v in &self.wedged[side] {
-            let d = space.distance(self.nn.state(v as usize), target);
-            if d < best.0 {
-                best = (d, v);
-            }
-        }
-        best.1
+    /// The vertex of `wedged[side]` nearest `target` (the part is not empty; the lowest
+    /// position among equally near ones).
+    fn nearest_wedged<S: Space>(&mut self, space: &S, side: usize, target: &[f64]) -> u32 {
+        let at = self.wedged_nn[side]
+            .nearest(space, target)
+            .expect("wedged parts are not empty");
+        self.wedged[side][at]
     }
 
     /// Adds the state `q`, reached from vertex `from` by a motion found valid, with that edge
-    /// marked valid, to the roadmap and to `wedged[side]`.
-    fn add_reached<S: Space>(&mut self, space: &S, side: usize, from: u32, q: &[f64], k: usize, range: f64) {
+    /// marked valid, to the roadmap (or finds an equal vertex) and to `wedged[side]`, and
+    /// returns its vertex.
+    fn add_reached<S: Space>(&mut self, space: &S, side: usize, from: u32, q: &[f64], k: usize, range: f64) -> u32 {
         let v = self.add(space, q, k, range);
         if v == from {
-            return;
+            return v;
         }
         if !self.adjacency[from as usize].iter().any(|&(u, _)| u == v) {
             let d = space.distance(self.nn.state(from as usize), q);
@@ -349,7 +381,9 @@ impl Roadmap {
         self.valid_edges.insert(edge(from, v));
         if !self.wedged[side].contains(&v) {
             self.wedged[side].push(v);
+            self.wedged_nn[side].insert(self.nn.state(v as usize));
         }
+        v
     }
 
     /// Remembers vertex `v`'s state as a place where the roadmap failed.
@@ -656,6 +690,10 @@ impl<S: Space> Planner<S> for LazyPrm {
                 self.settings.tree_step
             )));
         }
+        let escape = self.settings.escape;
+        if let Some(e) = &escape {
+            e.validate()?;
+        }
         let goals = valid_goals(space, validator, request)?;
         let dim = space.dim();
         let roadmap = match &mut self.roadmap {
@@ -666,6 +704,10 @@ impl<S: Space> Planner<S> for LazyPrm {
         let goal_ids: Vec<u32> = goals.iter().map(|g| roadmap.add(space, g, k, range)).collect();
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
+        // Per query end: its growth turns, the vertices they added, and its escape helper.
+        let mut turns = [0u64; 2];
+        let mut added = [0u64; 2];
+        let mut helpers: [Option<Helper>; 2] = [None, None];
         'search: loop {
             if let Some(path) = roadmap.search(start, &goal_ids, weight) {
                 if !run.next() {
@@ -716,17 +758,52 @@ impl<S: Space> Planner<S> for LazyPrm {
                 let space = motion.space();
                 space.sample(rng, &mut sample);
                 if (wedged[0] || wedged[1]) && rng.random_bool(tree_share) {
-                    // An RRT step of the wedged part (the two take turns when both are).
+                    // An RRT step of the wedged part (the two take turns when both are), or, once
+                    // the part is stuck, a turn of its escape helper.
                     turn = if wedged[0] && wedged[1] {
                         1 - turn
                     } else {
                         usize::from(wedged[1])
                     };
-                    let from = roadmap.nearest_wedged(space, turn, &sample);
-                    let q_from = roadmap.nn.state(from as usize);
-                    steer(space, q_from, &sample, tree_step, &mut near);
-                    if validator.is_valid(&near) && motion.check_motion(validator, q_from, &near) {
-                        roadmap.add_reached(motion.space(), turn, from, &near, k, range);
+                    turns[turn] += 1;
+                    if let Some(e) = escape
+                        && helpers[turn].as_ref().is_some_and(|h| h.idle() >= e.reset)
+                    {
+                        helpers[turn] = None;
+                    }
+                    let grown = match escape {
+                        Some(e) if e.stuck(turns[turn], added[turn]) && rng.random::<f64>() < e.share => {
+                            let ends = if turn == 0 {
+                                std::slice::from_ref(&start)
+                            } else {
+                                &goal_ids[..]
+                            };
+                            let nn = &roadmap.nn;
+                            let h = helpers[turn].get_or_insert_with(|| {
+                                Helper::new(ends.iter().map(|&v| (v as usize, nn.state(v as usize))), dim)
+                            });
+                            let steps = e.steps(tree_step, rng);
+                            let mut end = WedgedEnd {
+                                roadmap,
+                                side: turn,
+                                k,
+                                range,
+                            };
+                            h.turn(motion, validator, &mut end, &sample, steps).is_some()
+                        }
+                        _ => {
+                            let from = roadmap.nearest_wedged(space, turn, &sample);
+                            let q_from = roadmap.nn.state(from as usize);
+                            steer(space, q_from, &sample, tree_step, &mut near);
+                            let ok = validator.is_valid(&near) && motion.check_motion(validator, q_from, &near);
+                            if ok {
+                                roadmap.add_reached(motion.space(), turn, from, &near, k, range);
+                            }
+                            ok
+                        }
+                    };
+                    if grown {
+                        added[turn] += 1;
                     }
                     continue;
                 }

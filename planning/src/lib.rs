@@ -65,6 +65,7 @@ pub use hearth_kinematics as kinematics;
 
 pub mod birrt;
 pub mod error;
+pub mod escape;
 pub mod goal;
 pub mod lazy_prm;
 pub mod motion;
@@ -79,8 +80,9 @@ pub mod space;
 pub mod trajectory;
 pub mod validity;
 
-pub use birrt::{BiRrt, Connect, DynamicDomain, Escape};
+pub use birrt::{BiRrt, Connect, DynamicDomain};
 pub use error::PlanError;
+pub use escape::Escape;
 pub use lazy_prm::{LazyPrm, LazyPrmSettings};
 pub use motion::MotionValidator;
 pub use nn::NearestNeighbors;

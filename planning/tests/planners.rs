@@ -370,6 +370,46 @@ fn pocketed_goal_birrt_escape_reset() {
     assert!(2 * reset.1 < kept.1, "with resets {reset:?}, without {kept:?}");
 }
 
+/// LazyPRM in [`pocket`]: the goal's part of the roadmap grows like a tree of 0.4-long steps
+/// (`tree_step` × `range`), none of which leaves the corridor, and uniform samples land in it
+/// about once in 10⁶. The pocket escape ([`LazyPrmSettings::escape`], the helper BiRRT uses)
+/// takes the goal's part out through the hole; without it the part stays at the goal.
+#[test]
+fn lazy_prm_escapes_a_pocketed_goal() {
+    let request = PlanRequest::new(vec![99.0, 100.0], Goal::Config(vec![100.88, 100.5]));
+    let with = |escape| {
+        LazyPrm::new(LazyPrmSettings {
+            range: Some(1.6),
+            escape,
+            ..LazyPrmSettings::default()
+        })
+    };
+    let s = solve(
+        "pocket/lazy_prm_escape",
+        || with(Some(Escape::default())),
+        &pocket_space(),
+        POCKET_RESOLUTION,
+        &mut pocket(),
+        &request,
+        &budget(200_000),
+    );
+    // The path leaves through the hole.
+    let through_hole = s.path.states.windows(2).any(|w| {
+        (0..=100).any(|i| {
+            let t = f64::from(i) / 100.0;
+            let (x, y) = (w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1]));
+            x > 100.6 && x < 100.63 && y > 100.55 && y < 100.6
+        })
+    });
+    assert!(through_hole, "{:?}", s.path.states);
+    let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(7);
+    match with(None).plan(&mut motion, &mut pocket(), &request, &budget(200_000), &mut rng) {
+        Err(PlanError::Timeout { .. }) => {}
+        other => panic!("pocket/lazy_prm without the escape: expected a timeout, got {other:?}"),
+    }
+}
+
 /// A 6-D slab: below x₀ = 4 only states within 0.03 of 5 in x₂…x₅ are free, so a goal at
 /// x₀ = 0.5 leaves through a channel thin in four directions and long in two.
 fn slab() -> Region {
@@ -807,6 +847,16 @@ fn bad_input_is_named() {
             ..BiRrt::default()
         };
         let e = birrt.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::BadInput(m) if m.contains("escape") && m.contains(needle)),
+            "{escape:?}: {e}"
+        );
+        // LazyPRM's wedged query ends take the same escape, refused the same way.
+        let mut prm = LazyPrm::new(LazyPrmSettings {
+            escape: Some(escape),
+            ..LazyPrmSettings::default()
+        });
+        let e = prm.plan(&mut motion, &mut v, &r, &budget(10), &mut rng).unwrap_err();
         assert!(
             matches!(&e, PlanError::BadInput(m) if m.contains("escape") && m.contains(needle)),
             "{needle}: {e}"

@@ -99,20 +99,22 @@ pub struct BenchPlanArgs {
     /// minimum radius is a quarter of it). Off by default: see `docs/planning-log.md`.
     #[arg(long)]
     dynamic_domain: Option<f64>,
-    /// BiRRT only: turn off the pocket escape (`Escape`: a tree that almost never grows gets a
-    /// helper tree of short steps), for comparisons with plain balanced RRT-Connect.
+    /// BiRRT and LazyPRM: turn off the pocket escape (`Escape`: a tree, or a LazyPRM query
+    /// end's part of the roadmap, that almost never grows gets a helper tree of short steps),
+    /// for comparisons with plain balanced RRT-Connect.
     #[arg(long)]
     no_escape: bool,
-    /// BiRRT only: share of the escape helper's turns spent probing short steps to learn the
+    /// BiRRT and LazyPRM: share of the escape helper's turns spent probing short steps to learn the
     /// pocket's free directions (`Escape::probe`; 0 steers every helper step straight at its
     /// sample). When absent: the planner's default.
     #[arg(long)]
     escape_probe: Option<f64>,
-    /// BiRRT only: share of a stuck tree's turns given to its escape helper (`Escape::share`).
+    /// BiRRT and LazyPRM: share of a stuck tree's turns given to its escape helper
+    /// (`Escape::share`).
     /// When absent: the planner's default.
     #[arg(long)]
     escape_share: Option<f64>,
-    /// BiRRT only: helper turns without growth after which an escape helper is replaced by a
+    /// BiRRT and LazyPRM: helper turns without growth after which an escape helper is replaced by a
     /// fresh one (`Escape::reset`; 0 keeps every helper for the whole plan). When absent: the
     /// planner's default.
     #[arg(long)]
@@ -199,21 +201,26 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
             min_radius: radius / 4.0,
             ..DynamicDomain::default()
         }),
-        escape: (!a.no_escape).then(|| {
-            let e = Escape::default();
-            Escape {
-                probe: a.escape_probe.unwrap_or(e.probe),
-                share: a.escape_share.unwrap_or(e.share),
-                reset: match a.escape_reset {
-                    Some(0) => u64::MAX,
-                    Some(n) => n,
-                    None => e.reset,
-                },
-                ..e
-            }
-        }),
+        escape: escape_for(a),
         ..BiRrt::default()
     }
+}
+
+/// The pocket escape the arguments ask for (BiRRT's and LazyPRM's): `None` with `--no-escape`.
+fn escape_for(a: &BenchPlanArgs) -> Option<Escape> {
+    (!a.no_escape).then(|| {
+        let e = Escape::default();
+        Escape {
+            probe: a.escape_probe.unwrap_or(e.probe),
+            share: a.escape_share.unwrap_or(e.share),
+            reset: match a.escape_reset {
+                Some(0) => u64::MAX,
+                Some(n) => n,
+                None => e.reset,
+            },
+            ..e
+        }
+    })
 }
 
 /// RRT for a robot: `range` and `goal_zone` where given, else this benchmark's settings,
@@ -370,8 +377,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         bail!("--dynamic-domain applies to --planner birrt only");
     }
     let tunes_escape = a.escape_probe.is_some() || a.escape_share.is_some() || a.escape_reset.is_some();
-    if (a.no_escape || tunes_escape) && a.planner != PlannerKind::Birrt {
-        bail!("--no-escape, --escape-probe, --escape-share and --escape-reset apply to --planner birrt only");
+    if (a.no_escape || tunes_escape) && a.planner == PlannerKind::Rrt {
+        bail!(
+            "--no-escape, --escape-probe, --escape-share and --escape-reset apply to --planner birrt and lazyprm only"
+        );
     }
     if a.escape_probe.is_some_and(|p| !(0.0..1.0).contains(&p)) {
         bail!("--escape-probe must be in [0, 1)");
@@ -519,6 +528,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     PlannerKind::Lazyprm => Race::new(
                         LazyPrm::new(LazyPrmSettings {
                             range: lazyprm_range(&set.robot, a.range),
+                            escape: escape_for(&a),
                             ..LazyPrmSettings::default()
                         }),
                         threads,
