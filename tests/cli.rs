@@ -797,3 +797,88 @@ fn demo_runs_the_story_and_writes_the_success_rate() {
     fails(&["demo", "--seeds", "0"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every benchmark reports a `--json` file it cannot write before it measures anything.
+#[test]
+fn benches_refuse_an_unwritable_json_file_before_measuring() {
+    let bad = "/nonexistent/dir/bench.json";
+    for (args, measured) in [
+        (
+            &["bench", "kin", "--robot", "panda", "--samples", "5"][..],
+            "FK, all links",
+        ),
+        (
+            &[
+                "bench",
+                "sim",
+                "--generate",
+                "1",
+                "--rooms",
+                "2",
+                "--robot",
+                "none",
+                "--steps",
+                "8",
+                "--chunks",
+                "2",
+            ][..],
+            "Hz median",
+        ),
+        (
+            &[
+                "bench",
+                "lidar",
+                "--generate",
+                "1",
+                "--rooms",
+                "2",
+                "--scans",
+                "10",
+                "--chunks",
+                "1",
+            ][..],
+            "scans/s",
+        ),
+        (
+            &[
+                "bench",
+                "render",
+                "--generate",
+                "1",
+                "--rooms",
+                "2",
+                "--backend",
+                "raycast",
+                "--frames",
+                "1",
+                "--modalities",
+                "depth",
+            ][..],
+            "depth",
+        ),
+        (
+            &[
+                "bench",
+                "env",
+                "--config",
+                "examples/configs/point_nav_random.toml",
+                "--envs",
+                "1",
+                "--steps",
+                "2",
+            ][..],
+            "steps/s",
+        ),
+    ] {
+        let o = hearth(&[args, &["--json", bad][..]].concat());
+        let (out, err) = (stdout(&o), stderr(&o));
+        assert!(
+            !o.status.success() && err.contains(&format!("writing {bad}")),
+            "{args:?}: {err}"
+        );
+        assert!(
+            !err.contains("panicked") && !out.contains(measured),
+            "{args:?} measured first:\n{out}"
+        );
+    }
+}

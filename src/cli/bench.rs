@@ -1,7 +1,7 @@
 //! `hearth bench kin`: FK, Jacobian and IK speed, measured the same way every time.
 
 use std::hint::black_box;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -83,6 +83,16 @@ pub(crate) fn percentile(values: &[f64], p: f64) -> f64 {
     v[idx]
 }
 
+/// Creates (or empties) a benchmark's `--json` results file, so that a path that cannot be
+/// written is reported before anything is measured. Each benchmark calls it once its other
+/// arguments are checked, so that bad input leaves no file behind.
+pub(crate) fn create_json(path: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(path) = path {
+        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
 /// The chain a benchmark uses: the named one, or the robot's first.
 pub(crate) fn bench_chain(m: &RobotModel, name: Option<&str>) -> anyhow::Result<Chain> {
     let name = match name {
@@ -159,6 +169,7 @@ fn kin(a: BenchKinArgs) -> anyhow::Result<()> {
     let m = RobotModel::load(&a.robot).with_context(|| format!("loading robot `{}`", a.robot))?;
     let chain = bench_chain(&m, a.chain.as_deref())?;
     let tip = chain.tip().context("chain has no tip")?;
+    create_json(a.json.as_deref())?;
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(a.seed);
     let configs: Vec<Vec<f64>> = (0..1024)
         .map(|_| {

@@ -50,6 +50,7 @@ pub fn run(a: BenchEnvArgs) -> anyhow::Result<()> {
     };
 
     let mut env = Env::new(config.clone())?;
+    super::bench::create_json(a.json.as_deref())?;
     let backend = env.camera_backend().map(|b| b.name());
     let dim = env.action_space().size();
     let mut action = vec![0.0f32; dim];

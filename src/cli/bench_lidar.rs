@@ -113,6 +113,7 @@ pub fn run(a: BenchLidarArgs) -> anyhow::Result<()> {
         gaussian_std: a.gaussian_std,
     };
     let mut lidar = Lidar::new(spec.clone(), noise, 1)?;
+    super::bench::create_json(a.json.as_deref())?;
     // At the robot's laser link; a scene without a robot is scanned from 0.3 m above its origin.
     let (pose, mount) = match loaded.robot {
         Some(robot) => {

@@ -425,9 +425,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     }
     // A results file that cannot be written is reported before any plan is run (and after
     // every other input was checked, so that bad input leaves no file behind).
-    if let Some(path) = &a.json {
-        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
-    }
+    super::bench::create_json(a.json.as_deref())?;
     let total: usize = sets.iter().map(|(s, _)| s.problems.len()).sum::<usize>() * a.repeat as usize;
     let mut setups: BTreeMap<String, RobotSetup> = BTreeMap::new();
     let mut results = Vec::new();

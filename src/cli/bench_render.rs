@@ -37,6 +37,7 @@ pub fn run(a: BenchRenderArgs) -> anyhow::Result<()> {
     let modalities = Modality::parse_list(&a.modalities)?;
     let config = a.camera.config()?;
     let (world, _, mut camera) = super::render::robot_camera(&a.home, &a.robot, config.clone())?;
+    super::bench::create_json(a.json.as_deref())?;
     let triangles = camera.scene().triangle_estimate(16);
     println!(
         "{} items (~{triangles} triangles), {}×{}, backend {} ({}), preset {}",

@@ -141,6 +141,7 @@ pub fn run(a: BenchSimArgs) -> anyhow::Result<()> {
         sleeping: !a.no_sleep,
         ..WorldConfig::default()
     };
+    super::bench::create_json(a.json.as_deref())?;
     let main = time_world(&scene, &config, &a)?;
     let without = if with_robot {
         Some(time_world(&bare, &config, &a)?)
