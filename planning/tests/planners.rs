@@ -285,6 +285,29 @@ fn pocket_space() -> JointSpace {
     JointSpace::new(&[0., 0.], &[200., 200.], &[false, false]).unwrap()
 }
 
+/// [`solve`] in [`pocket`] within 200,000 iterations, asserting that the path leaves through
+/// the hole (some point of an edge, sampled a hundred times, lies in it).
+fn solve_pocket<P: Planner<JointSpace>>(label: &str, make: impl Fn() -> P, request: &PlanRequest) -> Solution {
+    let s = solve(
+        label,
+        make,
+        &pocket_space(),
+        POCKET_RESOLUTION,
+        &mut pocket(),
+        request,
+        &budget(200_000),
+    );
+    let through_hole = s.path.states.windows(2).any(|w| {
+        (0..=100).any(|i| {
+            let t = f64::from(i) / 100.0;
+            let (x, y) = (w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1]));
+            x > 100.6 && x < 100.63 && y > 100.55 && y < 100.6
+        })
+    });
+    assert!(through_hole, "{label}: {:?}", s.path.states);
+    s
+}
+
 #[test]
 fn pocketed_goal_birrt_escape() {
     pocketed_goal_escape("pocket/birrt", Connect::Other);
@@ -304,24 +327,7 @@ fn pocketed_goal_escape(label: &str, connect: Connect) {
         connect,
         ..BiRrt::default()
     };
-    let s = solve(
-        label,
-        || with(Some(Escape::default())),
-        &pocket_space(),
-        POCKET_RESOLUTION,
-        &mut pocket(),
-        &request,
-        &budget(200_000),
-    );
-    // The path leaves through the hole.
-    assert!(
-        s.path
-            .states
-            .iter()
-            .any(|q| q[0] > 100.6 && q[0] < 100.63 && q[1] > 100.5 && q[1] < 100.6),
-        "{:?}",
-        s.path.states
-    );
+    solve_pocket(label, || with(Some(Escape::default())), &request);
     // Without the escape the goal tree stays at the goal.
     let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
     let mut rng = Pcg64Mcg::seed_from_u64(7);
@@ -384,24 +390,7 @@ fn lazy_prm_escapes_a_pocketed_goal() {
             ..LazyPrmSettings::default()
         })
     };
-    let s = solve(
-        "pocket/lazy_prm_escape",
-        || with(Some(Escape::default())),
-        &pocket_space(),
-        POCKET_RESOLUTION,
-        &mut pocket(),
-        &request,
-        &budget(200_000),
-    );
-    // The path leaves through the hole.
-    let through_hole = s.path.states.windows(2).any(|w| {
-        (0..=100).any(|i| {
-            let t = f64::from(i) / 100.0;
-            let (x, y) = (w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1]));
-            x > 100.6 && x < 100.63 && y > 100.55 && y < 100.6
-        })
-    });
-    assert!(through_hole, "{:?}", s.path.states);
+    solve_pocket("pocket/lazy_prm_escape", || with(Some(Escape::default())), &request);
     let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
     let mut rng = Pcg64Mcg::seed_from_u64(7);
     match with(None).plan(&mut motion, &mut pocket(), &request, &budget(200_000), &mut rng) {
