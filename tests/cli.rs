@@ -675,29 +675,30 @@ fn bench_plan_writes_results_json() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `bench sim` on a small generated home with the Fetch: a few steps, quickly.
+const SMALL_SIM: [&str; 15] = [
+    "bench",
+    "sim",
+    "--generate",
+    "1",
+    "--rooms",
+    "2",
+    "--robot",
+    "fetch",
+    "--steps",
+    "8",
+    "--chunks",
+    "2",
+    "--settle",
+    "5",
+    "--no-sleep",
+];
+
 #[test]
 fn bench_sim_writes_json() {
     let dir = temp_dir("bench_sim");
     let path = dir.join("sim.json");
-    let args = [
-        "bench",
-        "sim",
-        "--generate",
-        "1",
-        "--rooms",
-        "2",
-        "--robot",
-        "fetch",
-        "--steps",
-        "8",
-        "--chunks",
-        "2",
-        "--settle",
-        "5",
-        "--no-sleep",
-        "--json",
-        path.to_str().unwrap(),
-    ];
+    let args = [&SMALL_SIM[..], &["--json", path.to_str().unwrap()][..]].concat();
     let o = hearth(&args);
     assert!(o.status.success(), "bench sim failed: {}", stderr(&o));
     let text = std::fs::read_to_string(&path).expect("bench sim wrote its JSON file");
@@ -807,23 +808,7 @@ fn benches_refuse_an_unwritable_json_file_before_measuring() {
             &["bench", "kin", "--robot", "panda", "--samples", "5"][..],
             "FK, all links",
         ),
-        (
-            &[
-                "bench",
-                "sim",
-                "--generate",
-                "1",
-                "--rooms",
-                "2",
-                "--robot",
-                "none",
-                "--steps",
-                "8",
-                "--chunks",
-                "2",
-            ][..],
-            "Hz median",
-        ),
+        (&SMALL_SIM[..], "Hz median"),
         (
             &[
                 "bench",
