@@ -541,38 +541,21 @@ fn bench_plan_writes_results_json() {
     let stopped = r["error"].as_str().is_some_and(|e| e.contains("(3 iterations"));
     let within = r["success"] == true && r["iterations"].as_u64().is_some_and(|n| n <= 3);
     assert!(stopped || within, "{r}");
-    // RRT on the Panda takes the benchmark's settings for it unless told otherwise.
+    // RRT on the Panda takes the benchmark's settings for it unless told otherwise; LazyPRM
+    // takes the pocket escape's flags.
     for (extra, says) in [
-        (&[][..], "RRT step 6 rad, goal zone 0.8"),
-        (&["--range", "2", "--goal-zone", "0"][..], "RRT step 2 rad, goal zone 0"),
+        (&["--planner", "rrt"][..], "RRT step 6 rad, goal zone 0.8"),
+        (
+            &["--planner", "rrt", "--range", "2", "--goal-zone", "0"][..],
+            "RRT step 2 rad, goal zone 0",
+        ),
+        (&["--planner", "lazyprm", "--no-escape"][..], "LazyPRM step"),
     ] {
-        let common = [
-            "--planner",
-            "rrt",
-            "--only",
-            "table_pick:1",
-            "--warm-up",
-            "0",
-            "--shortcut",
-            "none",
-        ];
+        let common = ["--only", "table_pick:1", "--warm-up", "0", "--shortcut", "none"];
         let o = bench_plan(&[&common[..], extra].concat());
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && err.contains(says), "{extra:?}: {err}");
     }
-    // LazyPRM takes the pocket escape's flags.
-    let o = bench_plan(&[
-        "--planner",
-        "lazyprm",
-        "--no-escape",
-        "--only",
-        "table_pick:1",
-        "--warm-up",
-        "0",
-        "--shortcut",
-        "none",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for (extra, says) in [
         (&["--only", "table_pick:7"][..], "no such problem"),
         (&["--only", "bookshelf"][..], "no such problem"),
