@@ -1,6 +1,6 @@
 //! [`BiRrt`]: RRT-Connect (Kuffner & LaValle 2000), OMPL's `RRTConnect`.
 
-use rand::{Rng, RngExt};
+use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
@@ -219,19 +219,6 @@ struct Stepper {
 }
 
 impl Stepper {
-    /// Steps from `from` towards `target` by at most `range` into `self.step`; whether that
-    /// state and the motion to it are valid.
-    fn try_step<S: Space, V: StateValidator + ?Sized>(
-        &mut self,
-        motion: &mut MotionValidator<S>,
-        validator: &mut V,
-        from: &[f64],
-        target: &[f64],
-        range: f64,
-    ) -> bool {
-        try_step(motion, validator, from, target, range, &mut self.step)
-    }
-
     /// Extends `grown` one step towards the sample `target`. Returns the new state's index, or
     /// `None` when the sample was outside the nearest state's domain or the step was blocked.
     fn extend<S: Space, V: StateValidator + ?Sized>(
@@ -246,7 +233,14 @@ impl Stepper {
         if self.domain.is_some() && space.distance(grown.tree.state(near), target) > grown.radius[near] {
             return None;
         }
-        let ok = self.try_step(motion, validator, grown.tree.state(near), target, self.range);
+        let ok = try_step(
+            motion,
+            validator,
+            grown.tree.state(near),
+            target,
+            self.range,
+            &mut self.step,
+        );
         if let Some((radius, min_radius, alpha)) = self.domain {
             let r = &mut grown.radius[near];
             if ok {
@@ -376,27 +370,15 @@ impl<S: Space> Planner<S> for BiRrt {
             attempts[grow] += 1;
             let [t0, t1] = &mut trees;
             let (this, other) = if grow == 0 { (t0, t1) } else { (t1, t0) };
-            // A helper that stopped growing is dropped ([`Escape::reset`]).
-            if let Some(e) = escape
-                && helpers[grow].as_ref().is_some_and(|h| h.idle() >= e.reset)
-            {
-                helpers[grow] = None;
-            }
-            let helper = match escape {
-                Some(e)
-                    if e.stuck(attempts[grow], (this.len() - roots[grow]) as u64) && rng.random::<f64>() < e.share =>
-                {
-                    let h = helpers[grow]
-                        .get_or_insert_with(|| Helper::new((0..roots[grow]).map(|r| (r, this.tree.state(r))), dim));
-                    Some((h, e))
-                }
-                _ => None,
-            };
+            // A stuck tree gives a share of its turns to its helper ([`Escape`]).
+            let grown = (attempts[grow], (this.len() - roots[grow]) as u64);
+            let helper = escape.and_then(|e| {
+                e.helper_turn(&mut helpers[grow], grown, range, rng, || {
+                    Helper::new((0..roots[grow]).map(|r| (r, this.tree.state(r))), dim)
+                })
+            });
             let extended = match helper {
-                Some((h, e)) => {
-                    let steps = e.steps(range, rng);
-                    h.turn(motion, validator, this, &target, steps)
-                }
+                Some((h, steps)) => h.turn(motion, validator, this, &target, steps),
                 None => stepper.extend(motion, validator, this, &target),
             };
             let Some(i) = extended else {

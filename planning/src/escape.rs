@@ -230,17 +230,42 @@ impl Escape {
         }
     }
 
-    /// Whether a tree that has grown by `grown` states in `attempts` turns counts as stuck.
-    pub(crate) fn stuck(&self, attempts: u64, grown: u64) -> bool {
-        attempts >= self.after && grown.saturating_mul(self.stuck_ratio) < attempts
-    }
-
-    /// The step lengths of one helper turn for a planner step `range`: the helper's own step,
-    /// the joining step, and the probe's when this turn is a probe.
-    pub(crate) fn steps<R: Rng + ?Sized>(&self, range: f64, rng: &mut R) -> (f64, f64, Option<f64>) {
+    /// The helper that takes this turn of a tree (or a roadmap's wedged part) that has grown by
+    /// `grown` states in `attempts` turns, with the step lengths of that turn for a planner step
+    /// `range` (the helper's own step, the joining step, and the probe's when the turn is a
+    /// probe); `None` when the turn is the tree's own. The helper in `slot` is dropped first
+    /// when it has been idle for [`reset`](Escape::reset) turns; a stuck tree's helper is made
+    /// by `new` on first use. Both planners draw from `rng` in the same order through here.
+    pub(crate) fn helper_turn<'h, R: Rng + ?Sized>(
+        &self,
+        slot: &'h mut Option<Helper>,
+        (attempts, grown): (u64, u64),
+        range: f64,
+        rng: &mut R,
+        new: impl FnOnce() -> Helper,
+    ) -> Option<(&'h mut Helper, Steps)> {
+        if slot.as_ref().is_some_and(|h| h.idle >= self.reset) {
+            *slot = None;
+        }
+        let stuck = attempts >= self.after && grown.saturating_mul(self.stuck_ratio) < attempts;
+        if !(stuck && rng.random::<f64>() < self.share) {
+            return None;
+        }
+        let helper = slot.get_or_insert_with(new);
         let probe = (self.probe > 0.0 && rng.random::<f64>() < self.probe).then(|| self.step * range / 3.0);
-        (self.step * range, self.join * range, probe)
+        let (short, long) = (self.step * range, self.join * range);
+        Some((helper, Steps { short, long, probe }))
     }
+}
+
+/// The step lengths of one helper turn ([`Escape::helper_turn`]).
+pub(crate) struct Steps {
+    /// The step that grows the helper.
+    short: f64,
+    /// The step that joins the helper's branch to its tree.
+    long: f64,
+    /// A probe's step, when the turn is a probe.
+    probe: Option<f64>,
 }
 
 /// What a helper's branch joins once a long step from it is free: a planner's tree, or the
@@ -284,11 +309,6 @@ impl Helper {
         }
     }
 
-    /// Helper turns since it last grew or joined.
-    pub(crate) fn idle(&self) -> u64 {
-        self.idle
-    }
-
     /// Adds helper state `h`'s branch to `into` where it is not there yet; returns the index
     /// of `h` there.
     fn join<S: Space, G: Grows>(&mut self, space: &S, h: usize, into: &mut G) -> usize {
@@ -319,7 +339,7 @@ impl Helper {
         validator: &mut V,
         into: &mut G,
         target: &[f64],
-        (short, long, probe): (f64, f64, Option<f64>),
+        Steps { short, long, probe }: Steps,
     ) -> Option<usize> {
         let near = self
             .tree

@@ -7,11 +7,11 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use crate::error::PlanError;
-use crate::escape::{Escape, Grows, Helper};
+use crate::escape::{Escape, Grows, Helper, try_step};
 use crate::motion::MotionValidator;
 use crate::nn::NearestNeighbors;
 use crate::planner::{Budget, Path, PlanRequest, Planner, Run, Solution, resolve_range, valid_goals};
-use crate::space::{Space, pull_towards, steer};
+use crate::space::{Space, pull_towards};
 use crate::validity::StateValidator;
 
 /// Settings of [`LazyPrm`], serde-derivable so a TOML file can set them; fields left out
@@ -766,23 +766,19 @@ impl<S: Space> Planner<S> for LazyPrm {
                         usize::from(wedged[1])
                     };
                     turns[turn] += 1;
-                    if let Some(e) = escape
-                        && helpers[turn].as_ref().is_some_and(|h| h.idle() >= e.reset)
-                    {
-                        helpers[turn] = None;
-                    }
-                    let grown = match escape {
-                        Some(e) if e.stuck(turns[turn], added[turn]) && rng.random::<f64>() < e.share => {
-                            let ends = if turn == 0 {
-                                std::slice::from_ref(&start)
-                            } else {
-                                &goal_ids[..]
-                            };
-                            let nn = &roadmap.nn;
-                            let h = helpers[turn].get_or_insert_with(|| {
-                                Helper::new(ends.iter().map(|&v| (v as usize, nn.state(v as usize))), dim)
-                            });
-                            let steps = e.steps(tree_step, rng);
+                    let ends = if turn == 0 {
+                        std::slice::from_ref(&start)
+                    } else {
+                        &goal_ids[..]
+                    };
+                    let nn = &roadmap.nn;
+                    let helper = escape.and_then(|e| {
+                        e.helper_turn(&mut helpers[turn], (turns[turn], added[turn]), tree_step, rng, || {
+                            Helper::new(ends.iter().map(|&v| (v as usize, nn.state(v as usize))), dim)
+                        })
+                    });
+                    let grown = match helper {
+                        Some((h, steps)) => {
                             let mut end = WedgedEnd {
                                 roadmap,
                                 side: turn,
@@ -791,11 +787,10 @@ impl<S: Space> Planner<S> for LazyPrm {
                             };
                             h.turn(motion, validator, &mut end, &sample, steps).is_some()
                         }
-                        _ => {
+                        None => {
                             let from = roadmap.nearest_wedged(space, turn, &sample);
                             let q_from = roadmap.nn.state(from as usize);
-                            steer(space, q_from, &sample, tree_step, &mut near);
-                            let ok = validator.is_valid(&near) && motion.check_motion(validator, q_from, &near);
+                            let ok = try_step(motion, validator, q_from, &sample, tree_step, &mut near);
                             if ok {
                                 roadmap.add_reached(motion.space(), turn, from, &near, k, range);
                             }

@@ -393,6 +393,7 @@ impl ObstacleSpec {
         // A size of -0 (which validation lets through: it is not below 0) becomes +0, the
         // sign parry's shapes require.
         let size = |x: f64| x as f32 + 0.0;
+        let sizes = |a: [f64; 3]| Vector::new(size(a[0]), size(a[1]), size(a[2]));
         let pose = |c: [f64; 3], q: [f64; 4]| {
             let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
             let n = if n > 0.0 { n } else { 1.0 };
@@ -410,7 +411,7 @@ impl ObstacleSpec {
                 half_extents,
                 quat_xyzw,
                 ..
-            } => Obstacle::cuboid(name, pose(*center, *quat_xyzw), v(half_extents.map(|x| x + 0.0))),
+            } => Obstacle::cuboid(name, pose(*center, *quat_xyzw), sizes(*half_extents)),
             Self::Sphere { center, radius, .. } => Obstacle::ball(name, v(*center), size(*radius)),
             Self::Cylinder {
                 center,

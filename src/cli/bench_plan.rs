@@ -104,19 +104,18 @@ pub struct BenchPlanArgs {
     /// for comparisons with plain balanced RRT-Connect.
     #[arg(long)]
     no_escape: bool,
-    /// BiRRT and LazyPRM: share of the escape helper's turns spent probing short steps to learn the
-    /// pocket's free directions (`Escape::probe`; 0 steers every helper step straight at its
-    /// sample). When absent: the planner's default.
+    /// BiRRT and LazyPRM: share of the escape helper's turns spent probing short steps to
+    /// learn the pocket's free directions (`Escape::probe`; 0 steers every helper step
+    /// straight at its sample). When absent: the planner's default.
     #[arg(long)]
     escape_probe: Option<f64>,
     /// BiRRT and LazyPRM: share of a stuck tree's turns given to its escape helper
-    /// (`Escape::share`).
-    /// When absent: the planner's default.
+    /// (`Escape::share`). When absent: the planner's default.
     #[arg(long)]
     escape_share: Option<f64>,
-    /// BiRRT and LazyPRM: helper turns without growth after which an escape helper is replaced by a
-    /// fresh one (`Escape::reset`; 0 keeps every helper for the whole plan). When absent: the
-    /// planner's default.
+    /// BiRRT and LazyPRM: helper turns without growth after which an escape helper is replaced
+    /// by a fresh one (`Escape::reset`; 0 keeps every helper for the whole plan). When absent:
+    /// the planner's default.
     #[arg(long)]
     escape_reset: Option<u64>,
     /// BiRRT only: which tree grows along the line joining the trees after an extension:
