@@ -48,7 +48,9 @@ pub struct LazyPrmSettings {
     /// Samples near a failure lie within this distance of it; `None` is 0.4 × `range`.
     pub enhance_radius: Option<f64>,
     /// Weight of the A* heuristic (default 1.5, at least 1; the heuristic is each vertex's
-    /// roadmap distance to the goals, from one Dijkstra search after edges were added):
+    /// roadmap distance to the search's far end, from one Dijkstra search after edges were
+    /// added; the search runs from the start, or from the goals while only their part of the
+    /// roadmap is wedged, see [`LazyPrmSettings::tree_share`]):
     /// candidate paths are at most this many times longer than the roadmap's shortest, and
     /// each search expands fewer vertices.
     /// A search runs after every candidate that fails its checks, so on large roadmaps the
@@ -102,7 +104,8 @@ impl Default for LazyPrmSettings {
 /// checked at once ([`LazyPrmSettings::tree_share`]), until its new vertices' lazy edges reach
 /// the rest of the roadmap. A part that barely grows even so (no step of that length leaves
 /// its pocket) gets [`BiRrt`](crate::BiRrt)'s pocket escape: a helper tree of shorter steps
-/// ([`LazyPrmSettings::escape`]).
+/// ([`LazyPrmSettings::escape`]). While the goals' part alone is wedged, the graph search runs
+/// from the goals to the start, so that the candidates fail near where it begins.
 ///
 /// Vertices are checked when sampled, unlike Bohlin & Kavraki's fully lazy original: one
 /// state check costs about a microsecond here, far less than the neighbour query and the
@@ -166,13 +169,13 @@ struct Roadmap {
     next_failure: usize,
     /// The graph search's arrays.
     scratch: SearchScratch,
-    /// Each vertex's roadmap distance to the nearest goal (infinite when no goal is joined to
-    /// it), computed by one search from the goals when edges were added since: the graph
-    /// search's heuristic. Removing an edge can only lengthen distances, so between additions
-    /// these stay a consistent lower bound.
-    to_goal: Vec<f64>,
-    /// `edges_added` and the goals when `to_goal` was computed.
-    to_goal_of: Option<(u64, Vec<u32>)>,
+    /// Each vertex's roadmap distance to the nearest of the graph search's targets (infinite
+    /// when none is joined to it), computed by one search from them when edges were added
+    /// since: the search's heuristic. Removing an edge can only lengthen distances, so between
+    /// additions these stay a consistent lower bound.
+    to_target: Vec<f64>,
+    /// `edges_added` and the targets when `to_target` was computed.
+    to_target_of: Option<(u64, Vec<u32>)>,
     /// Edges added to the roadmap so far.
     edges_added: u64,
     /// Neighbour ids of the vertex being added (reused, so adding allocates only its edges).
@@ -306,8 +309,8 @@ impl Roadmap {
             failures: Vec::new(),
             next_failure: 0,
             scratch: SearchScratch::default(),
-            to_goal: Vec::new(),
-            to_goal_of: None,
+            to_target: Vec::new(),
+            to_target_of: None,
             edges_added: 0,
             near: Vec::new(),
             wedged: [Vec::new(), Vec::new()],
@@ -456,60 +459,61 @@ impl Roadmap {
         self.adjacency[b as usize].retain(|&(w, _)| w != a);
     }
 
-    /// Fills `to_goal` with every vertex's roadmap distance to the nearest of `goals`
-    /// (Dijkstra from the goals), unless no edge was added since it was last computed for them.
-    fn update_to_goal(&mut self, goals: &[u32]) {
+    /// Fills `to_target` with every vertex's roadmap distance to the nearest of `targets`
+    /// (Dijkstra from them), unless no edge was added since it was last computed for them.
+    fn update_to_target(&mut self, targets: &[u32]) {
         let current = self
-            .to_goal_of
+            .to_target_of
             .as_ref()
-            .is_some_and(|(added, g)| *added == self.edges_added && g == goals);
+            .is_some_and(|(added, t)| *added == self.edges_added && t == targets);
         if current {
             return;
         }
         let Self {
             adjacency,
             scratch,
-            to_goal,
+            to_target,
             ..
         } = self;
-        to_goal.clear();
-        to_goal.resize(adjacency.len(), f64::INFINITY);
+        to_target.clear();
+        to_target.resize(adjacency.len(), f64::INFINITY);
         scratch.best_first(
             adjacency,
-            goals,
+            targets,
             |_, c| Some(c),
             |v, c| {
-                to_goal[v as usize] = c;
+                to_target[v as usize] = c;
                 false
             },
         );
-        self.to_goal_of = Some((self.edges_added, goals.to_vec()));
+        self.to_target_of = Some((self.edges_added, targets.to_vec()));
     }
 
-    /// A roadmap path from `start` to any of `goals` at most `weight` times longer than the
-    /// shortest, or `None` (weighted A*). The heuristic is each vertex's distance to the goals
-    /// in the roadmap as it was when edges were last added ([`Roadmap::update_to_goal`]):
-    /// exact until an edge fails, a lower bound after, and infinite where no goal can be
-    /// reached, so a search for a start cut off from the goals ends at once.
-    fn search(&mut self, start: u32, goals: &[u32], weight: f64) -> Option<Vec<u32>> {
-        self.update_to_goal(goals);
+    /// A roadmap path from one of `sources` to one of `targets`, at most `weight` times longer
+    /// than the shortest, or `None` (weighted A*). The heuristic is each vertex's distance to
+    /// the targets in the roadmap as it was when edges were last added
+    /// ([`Roadmap::update_to_target`]): exact until an edge fails, a lower bound after, and
+    /// infinite where no target can be reached, so a search from sources cut off from the
+    /// targets ends at once.
+    fn search(&mut self, sources: &[u32], targets: &[u32], weight: f64) -> Option<Vec<u32>> {
+        self.update_to_target(targets);
         let Self {
             adjacency,
             scratch,
-            to_goal,
+            to_target,
             ..
         } = self;
         // A vertex added since the distances were computed has no edge yet (any edge added
-        // would have brought a new computation), so no goal is joined to it.
-        let h = |v: u32| to_goal.get(v as usize).copied().unwrap_or(f64::INFINITY);
-        if h(start).is_infinite() {
+        // would have brought a new computation), so no target is joined to it.
+        let h = |v: u32| to_target.get(v as usize).copied().unwrap_or(f64::INFINITY);
+        if sources.iter().all(|&v| h(v).is_infinite()) {
             return None;
         }
         let priority = |u: u32, c: f64| {
             let hu = h(u);
             hu.is_finite().then_some(c + weight * hu)
         };
-        let reached = scratch.best_first(adjacency, &[start], priority, |v, _| goals.contains(&v))?;
+        let reached = scratch.best_first(adjacency, sources, priority, |v, _| targets.contains(&v))?;
         let mut path = vec![reached];
         let mut u = reached;
         while scratch.parent[u as usize] != u32::MAX {
@@ -708,8 +712,23 @@ impl<S: Space> Planner<S> for LazyPrm {
         let mut turns = [0u64; 2];
         let mut added = [0u64; 2];
         let mut helpers: [Option<Helper>; 2] = [None, None];
+        // Whether the search runs from the goals to the start: while the goals' part alone is
+        // wedged. The candidates then fail at that part's rim, near the search's sources, and
+        // the heuristic (distances to the start, over the rest of the roadmap) stays exact as
+        // they fail; searched from the start, each failure there left the heuristic short over
+        // the whole roadmap, and a search expanded 3–8 times as many vertices.
+        let mut from_goals = false;
         'search: loop {
-            if let Some(path) = roadmap.search(start, &goal_ids, weight) {
+            let starts = std::slice::from_ref(&start);
+            let found = if from_goals {
+                roadmap.search(&goal_ids, starts, weight).map(|mut path| {
+                    path.reverse();
+                    path
+                })
+            } else {
+                roadmap.search(starts, &goal_ids, weight)
+            };
+            if let Some(path) = found {
                 if !run.next() {
                     break;
                 }
@@ -750,6 +769,7 @@ impl<S: Space> Planner<S> for LazyPrm {
             } else {
                 [false; 2]
             };
+            from_goals = wedged[1] && !wedged[0];
             let mut turn = 0;
             for _ in 0..grow {
                 if !run.next() {
@@ -823,5 +843,60 @@ impl<S: Space> Planner<S> for LazyPrm {
         Err(PlanError::Timeout {
             stats: run.stats(motion, validator, vec![roadmap.nn.len()]),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::space::JointSpace;
+
+    /// A roadmap on a 2 × 4 grid of unit spacing, each vertex joined to its neighbours within
+    /// 1.5 (sides and diagonals), and its vertex ids by `(x, y)`.
+    fn grid() -> (JointSpace, Roadmap, impl Fn(u32, u32) -> u32) {
+        let space = JointSpace::new(&[-1.0; 2], &[5.0; 2], &[false; 2]).unwrap();
+        let mut roadmap = Roadmap::new(2);
+        for y in 0..2 {
+            for x in 0..4 {
+                roadmap.add(&space, &[f64::from(x), f64::from(y)], 8, 1.5);
+            }
+        }
+        (space, roadmap, |x, y| y * 4 + x)
+    }
+
+    fn length(space: &JointSpace, roadmap: &Roadmap, path: &[u32]) -> f64 {
+        path.windows(2)
+            .map(|w| space.distance(roadmap.nn.state(w[0] as usize), roadmap.nn.state(w[1] as usize)))
+            .sum()
+    }
+
+    #[test]
+    fn search_runs_from_either_end_and_avoids_removed_edges() {
+        let (space, mut roadmap, id) = grid();
+        let (start, goal) = (id(0, 0), id(3, 0));
+        let forward = roadmap.search(&[start], &[goal], 1.0).unwrap();
+        assert_eq!(forward, [id(0, 0), id(1, 0), id(2, 0), id(3, 0)]);
+        let backward = roadmap.search(&[goal], &[start], 1.0).unwrap();
+        assert_eq!(backward, [id(3, 0), id(2, 0), id(1, 0), id(0, 0)]);
+        // Cutting the bottom row's middle edge: both directions go round it, as short as
+        // each other (1 + 2·√2).
+        roadmap.remove_edge(id(1, 0), id(2, 0));
+        let forward = roadmap.search(&[start], &[goal], 1.0).unwrap();
+        let backward = roadmap.search(&[goal], &[start], 1.0).unwrap();
+        for path in [&forward, &backward] {
+            assert!(!path.windows(2).any(|w| edge(w[0], w[1]) == edge(id(1, 0), id(2, 0))));
+            assert!((length(&space, &roadmap, path) - (1.0 + 2.0 * 2f64.sqrt())).abs() < 1e-12);
+        }
+        assert_eq!((forward[0], backward[0]), (start, goal));
+        assert_eq!((forward.last(), backward.last()), (Some(&goal), Some(&start)));
+        // Cut off from the goal, a search from either end finds nothing.
+        for u in [id(1, 1), id(2, 1)] {
+            for v in [id(1, 0), id(2, 0)] {
+                roadmap.remove_edge(u, v);
+            }
+        }
+        roadmap.remove_edge(id(1, 1), id(2, 1));
+        assert_eq!(roadmap.search(&[start], &[goal], 1.5), None);
+        assert_eq!(roadmap.search(&[goal], &[start], 1.5), None);
     }
 }
