@@ -105,7 +105,8 @@ impl Default for LazyPrmSettings {
 /// the rest of the roadmap. A part that barely grows even so (no step of that length leaves
 /// its pocket) gets [`BiRrt`](crate::BiRrt)'s pocket escape: a helper tree of shorter steps
 /// ([`LazyPrmSettings::escape`]). While the goals' part alone is wedged, the graph search runs
-/// from the goals to the start, so that the candidates fail near where it begins.
+/// from the goals to the start, so that the candidates fail near where it begins; a candidate
+/// whose search begins in a wedged part ends at its first failing edge.
 ///
 /// Vertices are checked when sampled, unlike Bohlin & Kavraki's fully lazy original: one
 /// state check costs about a microsecond here, far less than the neighbour query and the
@@ -719,6 +720,8 @@ impl<S: Space> Planner<S> for LazyPrm {
         // the whole roadmap, and a search expanded about three times as many vertices on the
         // Fetch's cage.
         let mut from_goals = false;
+        // Whether the search starts in a wedged part (the goals', or the start's).
+        let mut from_wedged = false;
         'search: loop {
             let starts = std::slice::from_ref(&start);
             let found = if from_goals {
@@ -730,14 +733,14 @@ impl<S: Space> Planner<S> for LazyPrm {
                 if !run.next() {
                     break;
                 }
-                // The candidate's unchecked edges, in the order searched. From the start, all
-                // are checked and all that fail removed before the next search: one failure
-                // leaves the heuristic short far around it, so a search costs more than a few
-                // edge checks. From the goals, the first failure (most often at the rim of
-                // their part) ends the candidate: the next search costs little, and the edges
-                // past the failure lie on a route that the next candidate, through another
-                // rim edge, seldom takes (on the Fetch's cage, 277 of 291 plans over three
-                // seeds within 1 s against 269 checking them all; `docs/planning-log.md`).
+                // The candidate's unchecked edges, in the order searched. From a wedged part,
+                // the first failure (most often at the part's rim) ends the candidate: the next
+                // search costs little, and the edges past the failure lie on a route that the
+                // next candidate, through another rim edge, seldom takes (on the Fetch's cage,
+                // 277 of 291 plans over three seeds within 1 s against 269 checking them all;
+                // `docs/planning-log.md`). Otherwise all are checked and all that fail removed
+                // before the next search: a failure leaves the heuristic short far around it,
+                // so a search costs more than a few edge checks.
                 let mut blocked = false;
                 for w in path.windows(2) {
                     let e = edge(w[0], w[1]);
@@ -750,7 +753,7 @@ impl<S: Space> Planner<S> for LazyPrm {
                     } else {
                         roadmap.remove_edge(w[0], w[1]);
                         blocked = true;
-                        if from_goals {
+                        if from_wedged {
                             break;
                         }
                     }
@@ -780,6 +783,7 @@ impl<S: Space> Planner<S> for LazyPrm {
                 [false; 2]
             };
             from_goals = wedged[1] && !wedged[0];
+            from_wedged = wedged[0] || wedged[1];
             let mut turn = 0;
             for _ in 0..grow {
                 if !run.next() {
