@@ -238,6 +238,65 @@ impl PairTable {
         false
     }
 
+    /// A lower bound on the distance between the two links in configuration `q_full`, from
+    /// the certificates filled so far (the best over the levels of the cell's clearance less
+    /// how far the links can have moved from its centre), or `None` when no filled cell holds
+    /// `q_full`. Fills nothing. With [`PairTable::reach`] it bounds how far the joints can
+    /// move before the links could touch.
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let (a, b) = (panda.link_index("panda_link5").unwrap(), panda.link_index("panda_link7").unwrap());
+    /// let table = panda.pair_table(a, b).unwrap();
+    /// let mut q = panda.neutral_configuration();
+    /// q[5] = 1.8;
+    /// assert_eq!(table.clearance_bound(&q), None); // nothing filled yet
+    /// assert!(table.certainly_clear(&panda, &q));
+    /// assert!(table.clearance_bound(&q).unwrap() > 0.0);
+    /// ```
+    pub fn clearance_bound(&self, q_full: &[f64]) -> Option<f64> {
+        let mut t = [0.0f64; 2];
+        for (t, ax) in t.iter_mut().zip(&self.axes) {
+            let &v = q_full.get(ax.var)?;
+            *t = (v - ax.lower) / ax.range;
+            if !(*t >= 0.0 && *t <= 1.0) {
+                return None;
+            }
+        }
+        let mut best: Option<f64> = None;
+        for (k, cells) in self.levels.iter().enumerate() {
+            let mut index = 0usize;
+            let mut moved = SLACK;
+            for (t, ax) in t.iter().zip(&self.axes) {
+                let n = ax.base << k;
+                let at = ((t * n as f64) as usize).min(n - 1);
+                index = index * n + at;
+                moved += ((t * n as f64) - (at as f64 + 0.5)).abs() * ax.range / n as f64 * ax.reach;
+            }
+            let bits = cells.get(index)?.load(Ordering::Relaxed);
+            if bits != UNKNOWN {
+                let bound = f64::from(f32::from_bits(bits)) - moved;
+                best = Some(best.map_or(bound, |b| b.max(bound)));
+            }
+        }
+        best
+    }
+
+    /// The joints the two links' relative pose depends on, as (configuration variable, the
+    /// largest motion of a point of the far link per unit of that joint).
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let panda = RobotModel::builtin("panda").unwrap();
+    /// let (a, b) = (panda.link_index("panda_link5").unwrap(), panda.link_index("panda_link7").unwrap());
+    /// let vars: Vec<usize> = panda.pair_table(a, b).unwrap().reach().map(|(v, _)| v).collect();
+    /// assert_eq!(vars, [5, 6]); // joints 6 and 7
+    /// ```
+    pub fn reach(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.axes.iter().map(|ax| (ax.var, ax.reach))
+    }
+
     /// The largest motion bound a query in a cell of `level` can have: a clearance above it
     /// certifies the whole cell.
     fn cell_motion(&self, level: usize) -> f64 {

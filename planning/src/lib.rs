@@ -74,6 +74,7 @@ pub mod obstacles;
 pub mod planner;
 pub mod problem;
 pub mod race;
+mod reach;
 pub mod rrt;
 pub mod shortcut;
 pub mod space;

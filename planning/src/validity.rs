@@ -6,10 +6,11 @@ use hearth_kinematics::{
     Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, links_touch, to_pose, to_vector,
 };
 use nalgebra::{Isometry3, Point3};
-use parry3d::math::Vector;
+use parry3d::math::{Real, Vector};
 use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
+use crate::reach::{Reach, Row};
 
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
@@ -96,6 +97,84 @@ pub trait StateValidator {
     fn first_invalid(&mut self, states: &[f64], dim: usize) -> Option<usize> {
         states.chunks_exact(dim.max(1)).position(|q| !self.is_valid(q))
     }
+
+    /// Index of an invalid state among `states` (`dim` values each), which follow one another
+    /// along a motion (neighbours close together), or `None` when all are valid. Which invalid
+    /// state is reported when there are several is unspecified. The default checks midpoints
+    /// coarse to fine and the two ends last (a colliding stretch is found early), handing the
+    /// states to [`StateValidator::first_invalid`] a few at a time. An implementation may
+    /// skip states it can prove valid from a checked neighbour ([`RobotValidity`] does);
+    /// skipped states are not counted as checks.
+    ///
+    /// ```
+    /// use hearth_planning::validity::StateValidator;
+    /// struct Below(Vec<f64>);
+    /// impl StateValidator for Below {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0.push(q[0]); q[0] < 0.7 }
+    ///     fn checks(&self) -> u64 { self.0.len() as u64 }
+    /// }
+    /// let line: Vec<f64> = (0..=10).map(|i| i as f64 / 10.0).collect();
+    /// let mut v = Below(Vec::new());
+    /// let bad = v.first_invalid_along(&line, 1).unwrap();
+    /// assert!(line[bad] >= 0.7);
+    /// assert_eq!(v.0[0], 0.5); // the middle first
+    /// assert_eq!(Below(Vec::new()).first_invalid_along(&line[..6], 1), None);
+    /// ```
+    fn first_invalid_along(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+        bisect_first_invalid(self, states, dim)
+    }
+}
+
+/// [`StateValidator::first_invalid_along`]'s default: midpoints coarse to fine, then the two
+/// ends, [`crate::motion::BATCH`] states at a time through [`StateValidator::first_invalid`]. The
+/// group's states are copied into a buffer on the stack (on the heap only for spaces of over
+/// 32 dimensions).
+fn bisect_first_invalid<V: StateValidator + ?Sized>(validator: &mut V, flat: &[f64], dim: usize) -> Option<usize> {
+    let dim = dim.max(1);
+    let n = flat.len() / dim;
+    if n == 0 {
+        return None;
+    }
+    let state = |i: usize| &flat[i * dim..(i + 1) * dim];
+    const BATCH: usize = crate::motion::BATCH;
+    let mut stack = [0.0; BATCH * 32];
+    let mut heap = Vec::new();
+    let buf = if BATCH * dim <= stack.len() {
+        &mut stack[..BATCH * dim]
+    } else {
+        heap.resize(BATCH * dim, 0.0);
+        &mut heap[..]
+    };
+    let mut queue = std::collections::VecDeque::with_capacity(64);
+    queue.push_back((0usize, n - 1));
+    let mids = std::iter::from_fn(|| {
+        while let Some((lo, hi)) = queue.pop_front() {
+            if hi - lo >= 2 {
+                let mid = lo + (hi - lo) / 2;
+                queue.push_back((lo, mid));
+                queue.push_back((mid, hi));
+                return Some(mid);
+            }
+        }
+        None
+    });
+    let mut group = [0usize; BATCH];
+    let mut len = 0;
+    for i in mids.chain([n - 1, 0].into_iter().take(n.min(2))) {
+        buf[len * dim..(len + 1) * dim].copy_from_slice(state(i));
+        group[len] = i;
+        len += 1;
+        if len == BATCH {
+            if let Some(k) = validator.first_invalid(buf, dim) {
+                return Some(group[k]);
+            }
+            len = 0;
+        }
+    }
+    if len == 0 {
+        return None;
+    }
+    validator.first_invalid(&buf[..len * dim], dim).map(|k| group[k])
 }
 
 /// What makes a configuration invalid, with names for messages
@@ -270,7 +349,23 @@ pub struct RobotValidity {
     lane_poses: [Vec<Isometry3<f64>>; 4],
     /// Whether the lane buffers hold the current poses of the links that do not move.
     lanes_current: bool,
+    /// Displacement bounds for free radii ([`StateValidator::first_invalid_along`]).
+    reach: Reach,
+    /// Per lane: the free region of the state last found valid in it, as (bound row,
+    /// clearance) constraints ([`RobotValidity::free_region`]).
+    free: [Vec<(Row, f64)>; 4],
+    /// Per lane: the largest change per joint from the state to either neighbour along the
+    /// motion; a free region that cannot hold them is given up as soon as that shows.
+    next_to: [[f64; 32]; 4],
+    /// Scratch: the stretches of states not yet checked nor certified.
+    stretches: std::collections::VecDeque<(usize, usize)>,
 }
+
+/// States a stretch must hold before a check along a motion measures the free radius of its
+/// middle state ([`RobotValidity::first_invalid_along`]).
+const FREE_RADIUS_MIN_STATES: usize = 3;
+/// Clearance (m) a free radius leaves unused: covers f32 rounding in the distances.
+const FREE_RADIUS_SLACK: f64 = 1e-4;
 
 /// Checks in a row settled by the same part of a link after which the next check first
 /// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
@@ -549,11 +644,22 @@ impl RobotValidity {
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
         let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves);
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
-        let pair_tables = pairs
+        let pair_tables: Vec<Option<Arc<PairTable>>> = pairs
             .iter()
             .zip(&pair_moves)
             .map(|(&(a, b), &m)| if m { model.pair_table(a, b) } else { None })
             .collect();
+        let tables: Vec<Vec<(usize, f64)>> = pair_tables
+            .iter()
+            .map(|t| t.as_ref().map(|t| t.reach().collect()).unwrap_or_default())
+            .collect();
+        let reach = Reach::new(&model, &chain, &geometric, &pairs, &tables, |l| {
+            let centres = broad.cover[broad.cover_range[l].clone()].iter().map(|(c, _)| c);
+            centres
+                .chain([&broad.local_center[l]])
+                .map(|c| c.coords.norm())
+                .fold(0.0, f64::max)
+        });
         Self {
             broad,
             link_moves,
@@ -566,6 +672,10 @@ impl RobotValidity {
             lane_q: std::array::from_fn(|_| model.neutral_configuration()),
             lane_poses: std::array::from_fn(|_| model.pose_buffer()),
             lanes_current: false,
+            reach,
+            stretches: std::collections::VecDeque::with_capacity(64),
+            free: std::array::from_fn(|_| Vec::with_capacity(64)),
+            next_to: [[0.0; 32]; 4],
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -810,6 +920,18 @@ impl RobotValidity {
     /// pass, then each state's obstacles and self-collision in order. `None` when the lanes
     /// cannot be used for them (the caller checks them one by one).
     fn first_invalid4(&mut self, states: &[f64], dim: usize) -> Option<Option<usize>> {
+        self.first_invalid4_free(states, dim, None)
+    }
+
+    /// [`RobotValidity::first_invalid4`], also finding the free region of each valid state
+    /// `k` ([`RobotValidity::free_region`] with cap `free.0[k]`; whether it has one in
+    /// `free.1[k]`).
+    fn first_invalid4_free(
+        &mut self,
+        states: &[f64],
+        dim: usize,
+        mut free: Option<([f64; 4], &mut [bool; 4])>,
+    ) -> Option<Option<usize>> {
         let n = states.len() / dim;
         // (A non-finite value makes `fk_update4` fail, which also sends the states one by one.)
         if !(2..=4).contains(&n) || dim != self.chain.dof() || !self.fixed_poses_current {
@@ -839,6 +961,9 @@ impl RobotValidity {
             std::mem::swap(&mut self.poses, &mut self.lane_poses[k]);
             std::mem::swap(&mut self.q_full, &mut self.lane_q[k]);
             let ok = !self.robot_blocked() && !self.attached_blocked();
+            if ok && let Some((caps, certified)) = free.as_mut() {
+                certified[k] = self.free_region(k, caps[k]);
+            }
             std::mem::swap(&mut self.poses, &mut self.lane_poses[k]);
             std::mem::swap(&mut self.q_full, &mut self.lane_q[k]);
             if !ok {
@@ -846,6 +971,251 @@ impl RobotValidity {
             }
         }
         Some(None)
+    }
+
+    /// The region around the state just found valid (its poses current) within which every
+    /// state passes the check, as constraints on the straight motion to a state: each moving
+    /// link must move less than its covering balls' clearance to the obstacles, and each
+    /// checked pair's distance must change by less than the pair's clearance (from its
+    /// bounding balls when those are apart, else from its clearance table, else from its
+    /// covering balls). Within the region each covering ball stays clear, so the exact tests
+    /// are never reached, and each pair stays apart. Constraints that a motion of at most
+    /// `cap` in [`Reach::distance`] cannot reach are left out. Fills `self.free[lane]` and
+    /// returns `false` when nothing can be certified (an attached object, obstacles that
+    /// cannot measure clearance, a link without covering balls, a clearance of 0).
+    fn free_region(&mut self, lane: usize, cap: f64) -> bool {
+        let mut free = std::mem::take(&mut self.free[lane]);
+        free.clear();
+        let ok = self.fill_free_region(lane, cap, &mut free);
+        self.free[lane] = free;
+        ok
+    }
+
+    fn fill_free_region(&mut self, lane: usize, cap: f64, free: &mut Vec<(Row, f64)>) -> bool {
+        if !self.attached.is_empty() || cap.is_nan() || cap <= 0.0 || self.broad.moving.len() > BallBatch::CAPACITY {
+            return false;
+        }
+        let b = &mut self.broad;
+        let mut clearance = [0.0; BallBatch::CAPACITY];
+        // The moving links' bounding balls in one batch: a link whose ball stays clear is clear.
+        b.batch.clear();
+        let mut farthest = 0.0f64;
+        for &i in &b.moving {
+            let l = self.geometric[i];
+            let scale = self.reach.scale(Row::Link(i));
+            if !scale.is_finite() || !b.radius[l].is_finite() {
+                return false;
+            }
+            farthest = farthest.max(scale * cap);
+            b.batch.push(to_vector(&b.world_center[l]), b.balls[i].radius);
+        }
+        let look = (farthest + FREE_RADIUS_SLACK) as f32;
+        if !self.obstacles.balls_clearance(&b.batch, look, &mut clearance) {
+            return false;
+        }
+        // The links whose bounding ball could reach an obstacle: their covering balls, as
+        // many links to a batch as fit.
+        let mut near = [(0usize, 0.0f64); BallBatch::CAPACITY];
+        let mut n_near = 0;
+        for (k, &i) in b.moving.iter().enumerate() {
+            let scale = self.reach.scale(Row::Link(i));
+            let c = f64::from(clearance[k]) - FREE_RADIUS_SLACK;
+            if scale > 0.0 && c < scale * cap {
+                near[n_near] = (i, c);
+                n_near += 1;
+            }
+        }
+        let mut start = 0;
+        while start < n_near {
+            b.batch.clear();
+            let mut end = start;
+            while end < n_near {
+                let l = self.geometric[near[end].0];
+                let range = b.cover_range[l].clone();
+                if range.is_empty() || range.len() > BallBatch::CAPACITY {
+                    return false;
+                }
+                if b.batch.len() + range.len() > BallBatch::CAPACITY {
+                    break;
+                }
+                let pose = &self.poses[l];
+                for k in range {
+                    b.batch.push(to_vector(&(pose * b.cover[k].0)), b.cover[k].1 as f32);
+                }
+                end += 1;
+            }
+            if !self.obstacles.balls_clearance(&b.batch, look, &mut clearance) {
+                return false;
+            }
+            let mut ball = 0;
+            for &(i, bounding) in &near[start..end] {
+                let count = b.cover_range[self.geometric[i]].len();
+                let cover = clearance[ball..ball + count].iter().fold(Real::MAX, |a, &c| a.min(c));
+                ball += count;
+                let c = bounding.max(f64::from(cover) - FREE_RADIUS_SLACK);
+                if c <= 0.0 {
+                    return false;
+                }
+                if c < self.reach.scale(Row::Link(i)) * cap {
+                    if c <= self.reach.motion(Row::Link(i), &self.next_to[lane][..self.chain.dof()]) {
+                        return false;
+                    }
+                    free.push((Row::Link(i), c));
+                }
+            }
+            start = end;
+        }
+        for (p, &(a, l)) in self.pairs.iter().enumerate() {
+            let scale = self.reach.scale(Row::Pair(p));
+            if !self.pair_moves[p] || scale == 0.0 {
+                continue;
+            }
+            if !scale.is_finite() {
+                return false;
+            }
+            let apart = (b.world_center[a] - b.world_center[l]).norm() - b.radius[a] - b.radius[l] - FREE_RADIUS_SLACK;
+            if apart > 0.0 {
+                if apart < scale * cap {
+                    if apart <= self.reach.motion(Row::Pair(p), &self.next_to[lane][..self.chain.dof()]) {
+                        return false;
+                    }
+                    free.push((Row::Pair(p), apart));
+                }
+                continue;
+            }
+            // A pair near each other: its table's certificate, where it has one.
+            let tabled = self.pair_tables[p]
+                .as_ref()
+                .and_then(|t| t.clearance_bound(&self.q_full))
+                .map(|c| c - FREE_RADIUS_SLACK);
+            if let Some(c) = tabled
+                && c > 0.0
+            {
+                if c < self.reach.scale(Row::Table(p)) * cap {
+                    if c <= self
+                        .reach
+                        .motion(Row::Table(p), &self.next_to[lane][..self.chain.dof()])
+                    {
+                        return false;
+                    }
+                    free.push((Row::Table(p), c));
+                }
+                continue;
+            }
+            // Else their covering balls.
+            let (ra, rl) = (b.cover_range[a].clone(), b.cover_range[l].clone());
+            if ra.len() > BallBatch::CAPACITY || rl.len() > BallBatch::CAPACITY {
+                return false;
+            }
+            let (pa, pl) = (&self.poses[a], &self.poses[l]);
+            let mut far = [(Point3::origin(), 0.0); BallBatch::CAPACITY];
+            for (f, k) in far.iter_mut().zip(rl) {
+                *f = (pl * b.cover[k].0, b.cover[k].1);
+            }
+            let far = &far[..b.cover_range[l].len()];
+            let mut least = f64::INFINITY;
+            for i in ra {
+                let (ci, ri) = (pa * b.cover[i].0, b.cover[i].1);
+                for (ck, rk) in far {
+                    least = least.min((ck - ci).norm() - ri - rk);
+                }
+            }
+            let c = least - FREE_RADIUS_SLACK;
+            if c.is_nan() || c <= 0.0 {
+                return false;
+            }
+            if c < scale * cap {
+                if c <= self.reach.motion(Row::Pair(p), &self.next_to[lane][..self.chain.dof()]) {
+                    return false;
+                }
+                free.push((Row::Pair(p), c));
+            }
+        }
+        true
+    }
+
+    /// [`StateValidator::first_invalid_along`] with free regions: each stretch of unchecked
+    /// states has its middle state checked (four stretches share one forward kinematics
+    /// pass); the states next to it inside its free region are then valid without a check,
+    /// and only what lies beyond is split again.
+    fn first_invalid_along_free(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+        let n = states.len() / dim;
+        let state = |i: usize| &states[i * dim..(i + 1) * dim];
+        let mut stretches = std::mem::take(&mut self.stretches);
+        stretches.clear();
+        stretches.push_back((0usize, n - 1));
+        let mut buf = [0.0; 4 * 32];
+        let mut found = None;
+        while !stretches.is_empty() {
+            let mut group = [(0usize, 0usize, 0usize); 4];
+            let mut len = 0;
+            while len < 4 {
+                let Some((lo, hi)) = stretches.pop_front() else { break };
+                group[len] = (lo, lo + (hi - lo) / 2, hi);
+                len += 1;
+            }
+            let mut caps = [0.0; 4];
+            for (k, &(lo, mid, hi)) in group[..len].iter().enumerate() {
+                buf[k * dim..(k + 1) * dim].copy_from_slice(state(mid));
+                let next = &mut self.next_to[k][..dim];
+                next.fill(0.0);
+                for side in [mid.saturating_sub(1).max(lo), (mid + 1).min(hi)] {
+                    for (d, (a, b)) in next.iter_mut().zip(state(side).iter().zip(state(mid))) {
+                        *d = d.max((a - b).abs());
+                    }
+                }
+                if hi - lo + 1 >= FREE_RADIUS_MIN_STATES {
+                    let reach = &self.reach;
+                    caps[k] = reach
+                        .distance(state(mid), state(lo))
+                        .max(reach.distance(state(mid), state(hi)));
+                }
+            }
+            let mut certified = [false; 4];
+            let batch = &buf[..len * dim];
+            let invalid = match self.first_invalid4_free(batch, dim, Some((caps, &mut certified))) {
+                Some(r) => r,
+                None => (0..len).find(|&k| {
+                    if !self.is_valid(&batch[k * dim..(k + 1) * dim]) {
+                        return true;
+                    }
+                    certified[k] = self.free_region(k, caps[k]);
+                    false
+                }),
+            };
+            if let Some(k) = invalid {
+                found = Some(group[k].1);
+                break;
+            }
+            let mut delta = [0.0; 32];
+            for (k, &(lo, mid, hi)) in group[..len].iter().enumerate() {
+                let (mut left, mut right) = (mid, mid);
+                if certified[k] {
+                    let free = &self.free[k];
+                    let reach = &self.reach;
+                    let mut within = |i: usize| {
+                        for ((d, a), b) in delta.iter_mut().zip(state(i)).zip(state(mid)) {
+                            *d = (a - b).abs();
+                        }
+                        free.iter().all(|&(row, c)| reach.motion(row, &delta[..dim]) < c)
+                    };
+                    while left > lo && within(left - 1) {
+                        left -= 1;
+                    }
+                    while right < hi && within(right + 1) {
+                        right += 1;
+                    }
+                }
+                if left > lo {
+                    stretches.push_back((lo, left - 1));
+                }
+                if right < hi {
+                    stretches.push_back((right + 1, hi));
+                }
+            }
+        }
+        self.stretches = stretches;
+        found
     }
 
     /// The first obstacle that link `l` touches (exact, part by part).
@@ -1334,6 +1704,16 @@ impl StateValidator for RobotValidity {
 
     fn checks(&self) -> u64 {
         self.checks
+    }
+
+    /// Skips the states that a checked state's free radius proves valid (see
+    /// [`RobotValidity`]): along a fine motion most states lie well within one.
+    fn first_invalid_along(&mut self, states: &[f64], dim: usize) -> Option<usize> {
+        let dim = dim.max(1);
+        if dim != self.chain.dof() || dim > 32 || states.len() / dim < FREE_RADIUS_MIN_STATES {
+            return bisect_first_invalid(self, states, dim);
+        }
+        self.first_invalid_along_free(states, dim)
     }
 
     /// Four states at a time share one four-lane forward kinematics pass (bit for bit the

@@ -422,3 +422,134 @@ fn states_whose_parts_are_millimetres_clear_are_valid_where_gjk_reports_contact(
     // The case this test is about (if parry stops reporting these contacts, it still passes).
     eprintln!("{gjk_contacts} of {checked} clear states had a GJK contact");
 }
+
+/// Straight motions sampled every `step` (max-norm), checked along the motion with
+/// `first_invalid_along` (which skips the states inside a checked state's free region): it
+/// must find an invalid state exactly when checking every state one by one does, and the state
+/// it reports must be invalid. (The one-by-one answers are compared with the brute-force
+/// reference by the tests above; parry's GJK reports contact between a cylinder and a box
+/// that are a millimetre apart, which the checker sees through, so the reference here is the
+/// checker itself.) Returns (clear motions, blocked motions, states of the clear motions,
+/// checks spent on them).
+fn compare_along(v: &mut RobotValidity, motions: &[(Vec<f64>, Vec<f64>)], step: f64) -> [u64; 4] {
+    let mut one_by_one = v.clone();
+    let mut out = [0u64; 4];
+    for (k, (a, b)) in motions.iter().enumerate() {
+        let dim = a.len();
+        let span = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let n = (span / step).ceil() as usize + 1;
+        let flat: Vec<f64> = (0..n)
+            .flat_map(|i| {
+                let t = i as f64 / (n - 1).max(1) as f64;
+                a.iter().zip(b).map(move |(x, y)| x + t * (y - x))
+            })
+            .collect();
+        let expected = flat.chunks_exact(dim).position(|q| !one_by_one.is_valid(q));
+        let before = v.checks();
+        let got = v.first_invalid_along(&flat, dim);
+        assert_eq!(
+            got.is_some(),
+            expected.is_some(),
+            "motion {k}: {got:?} against {expected:?}"
+        );
+        if let Some(i) = got {
+            assert!(
+                !one_by_one.is_valid(&flat[i * dim..(i + 1) * dim]),
+                "motion {k}: state {i} is valid"
+            );
+            out[1] += 1;
+        } else {
+            out[0] += 1;
+            out[2] += n as u64;
+            out[3] += v.checks() - before;
+        }
+    }
+    out
+}
+
+/// Motions from random valid configurations to ones up to `reach` away in each joint, where the
+/// second is valid too (so blocked motions cross an obstacle between two free ends).
+fn short_motions(chain: &Chain, r: &mut Reference, seed: u64, n: usize, reach: f64) -> Vec<(Vec<f64>, Vec<f64>)> {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    let mut out = Vec::new();
+    let mut q = vec![0.0; chain.dof()];
+    while out.len() < n {
+        chain.random_configuration(&mut rng, &mut q);
+        if !r.is_valid(&q) {
+            continue;
+        }
+        let mut to: Vec<f64> = q.iter().map(|x| x + rng.random_range(-reach..reach)).collect();
+        chain.clamp(&mut to);
+        if r.is_valid(&to) {
+            out.push((q.clone(), to));
+        }
+    }
+    out
+}
+
+#[test]
+fn motions_checked_along_match_brute_force() {
+    let (arm, acm) = panda();
+    for (seed, n, margin) in [(7u64, 24usize, 0.0f32), (8, 12, 0.02)] {
+        let scene = ParryScene::new(cluttered(seed, n)).with_margin(margin);
+        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+        let mut r = Reference::new(&arm, &acm, scene);
+        let motions = short_motions(&arm, &mut r, seed, 150, 1.5);
+        let [clear, blocked, states, checks] = compare_along(&mut v, &motions, 0.005);
+        assert!(
+            clear > 20 && blocked > 20,
+            "seed {seed}: {clear} clear, {blocked} blocked"
+        );
+        // The free regions spare many of the checks of a clear motion, even in clutter.
+        assert!(
+            checks * 4 < states * 3,
+            "seed {seed}: {checks} checks for {states} states"
+        );
+    }
+}
+
+#[test]
+fn fetch_motions_checked_along_match_brute_force() {
+    // A prismatic torso, and links (the head) that the torso moves but are not the arm's.
+    let (chain, acm) = robot("fetch", "arm_with_torso", 300);
+    let scene = ParryScene::new(
+        cluttered(9, 40)
+            .into_iter()
+            .filter(|o| o.pose.translation.x > 0.0 && o.pose.translation.z > 0.4)
+            .map(|mut o| {
+                o.pose.translation.x += 0.35;
+                o
+            })
+            .collect(),
+    );
+    let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
+    let mut r = Reference::new(&chain, &acm, scene);
+    let motions = short_motions(&chain, &mut r, 10, 100, 1.5);
+    let [clear, blocked, states, checks] = compare_along(&mut v, &motions, 0.005);
+    assert!(clear > 10 && blocked > 10, "{clear} clear, {blocked} blocked");
+    assert!(checks * 2 < states, "{checks} checks for {states} states");
+}
+
+#[test]
+fn mbm_table_pick_motions_checked_along_match_brute_force() {
+    // Start to goal in a straight line: grazing the table and the objects near the goal.
+    let set = ProblemSet::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/panda_table_pick.json")).unwrap();
+    let (arm, acm) = panda();
+    let mut total = [0u64; 4];
+    for problem in set.valid_problems() {
+        let scene = problem.scene();
+        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
+        let mut r = Reference::new(&arm, &acm, scene);
+        let mut motions: Vec<_> = problem
+            .goals
+            .iter()
+            .map(|g| (problem.start.clone(), g.clone()))
+            .collect();
+        motions.extend(short_motions(&arm, &mut r, 31, 40, 1.5));
+        for (t, c) in total.iter_mut().zip(compare_along(&mut v, &motions, 0.002)) {
+            *t += c;
+        }
+    }
+    assert!(total[0] > 10 && total[1] > 2, "{total:?}");
+    assert!(total[3] * 2 < total[2], "{total:?}");
+}

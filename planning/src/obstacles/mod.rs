@@ -255,6 +255,37 @@ pub trait Obstacles: Send + Sync {
         balls_one_by_one(self, balls)
     }
 
+    /// How far each ball of `balls` is from the obstacles: `out[i]` is the distance from ball
+    /// `i`'s surface to the nearest obstacle, less the margin (0 or negative when it touches
+    /// something), or `max` when that is farther than `max`. A ball grown by less than its
+    /// value is then reported clear by [`Obstacles::balls_touching`]. `false` (and `out`
+    /// unspecified) when the implementation cannot tell cheaply (the default); callers then
+    /// assume no clearance. State checks use it to prove the states near a checked one valid
+    /// without checking them ([`StateValidator::first_invalid_along`]).
+    ///
+    /// [`StateValidator::first_invalid_along`]: crate::validity::StateValidator::first_invalid_along
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{BallBatch, Obstacle, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let scene = ParryScene::new(vec![Obstacle::cuboid("box", Pose::IDENTITY, Vector::splat(0.5))]);
+    /// let mut balls = BallBatch::new();
+    /// balls.push(Vector::new(0.0, 0.0, 1.0), 0.1); // 0.4 m above the box
+    /// balls.push(Vector::new(0.8, 0.0, 0.0), 0.1); // 0.2 m beside it
+    /// let mut out = [0.0; BallBatch::CAPACITY];
+    /// assert!(scene.balls_clearance(&balls, 1.0, &mut out));
+    /// assert!((out[0] - 0.4).abs() < 1e-6 && (out[1] - 0.2).abs() < 1e-6);
+    /// assert!(scene.balls_clearance(&balls, 0.3, &mut out));
+    /// assert_eq!(out[0], 0.3); // capped
+    /// assert!(scene.with_margin(0.05).balls_clearance(&balls, 1.0, &mut out));
+    /// assert!((out[1] - 0.15).abs() < 1e-6);
+    /// ```
+    fn balls_clearance(&self, balls: &BallBatch, max: Real, out: &mut [Real; BallBatch::CAPACITY]) -> bool {
+        let _ = (balls, max, out);
+        false
+    }
+
     /// The smallest distance from `shape` at `pose` to any obstacle, and which obstacle, if it
     /// is at most `max_dist` (0 when touching or penetrating). `None` when nothing lies within
     /// `max_dist`.

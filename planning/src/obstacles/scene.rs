@@ -796,6 +796,79 @@ impl Quick {
     }
 }
 
+impl Quick {
+    /// Lowers `out[j]` to the clearance of ball `j` of `b` (surface to this obstacle, less
+    /// `margin`) for the balls `0..n`, eight balls per step; `false` when parry would have to
+    /// measure it.
+    #[inline]
+    fn clearance(&self, b: &BallBatch, n: usize, margin: Real, out: &mut [Real; BallBatch::CAPACITY]) -> bool {
+        /// `out[j] = min(out[j], gap(x, y, z) − r)` over the balls, eight at a time.
+        #[inline(always)]
+        fn lanes(
+            b: &BallBatch,
+            n: usize,
+            margin: Real,
+            out: &mut [Real; BallBatch::CAPACITY],
+            gap: impl Fn(f32x8, f32x8, f32x8) -> f32x8,
+        ) {
+            let load = |v: &[Real; BallBatch::CAPACITY], o: usize| {
+                let mut lane = [0.0; 8];
+                lane.copy_from_slice(&v[o..o + 8]);
+                f32x8::new(lane)
+            };
+            let margin = f32x8::splat(margin);
+            for chunk in 0..n.div_ceil(8) {
+                let o = chunk * 8;
+                let c = gap(load(&b.x, o), load(&b.y, o), load(&b.z, o)) - load(&b.r, o) - margin;
+                let least = c.min(load(out, o)).to_array();
+                out[o..o + 8].copy_from_slice(&least);
+            }
+        }
+        let at = |c: Vector| (f32x8::splat(c.x), f32x8::splat(c.y), f32x8::splat(c.z));
+        match *self {
+            Quick::Cuboid(ref obb) => {
+                let (cx, cy, cz) = at(obb.center);
+                lanes(b, n, margin, out, |x, y, z| {
+                    cuboid_gap2(x - cx, y - cy, z - cz, obb).sqrt()
+                });
+            }
+            Quick::Ball { center, radius: rc } => {
+                let (cx, cy, cz) = at(center);
+                lanes(b, n, margin, out, |x, y, z| {
+                    let (d2, _) = balls_gap2(x - cx, y - cy, z - cz, rc, f32x8::ZERO);
+                    d2.sqrt() - f32x8::splat(rc)
+                });
+            }
+            Quick::Cylinder {
+                center,
+                axis,
+                half_height,
+                radius: rc,
+            } => {
+                let (cx, cy, cz) = at(center);
+                lanes(b, n, margin, out, |x, y, z| {
+                    cylinder_gap2(x - cx, y - cy, z - cz, axis, half_height, rc).sqrt()
+                });
+            }
+            Quick::Capsule { a, b: tip, radius: rc } => {
+                let ab = tip - a;
+                let len2 = ab.length_squared();
+                for (j, o) in out.iter_mut().enumerate().take(n) {
+                    let (c, r) = b.ball(j);
+                    let t = if len2 > 0.0 {
+                        ((c - a).dot(ab) / len2).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    *o = o.min((c - (a + ab * t)).length() - rc - r - margin);
+                }
+            }
+            Quick::Other => return false,
+        }
+        true
+    }
+}
+
 impl Obstacles for ParryScene {
     fn balls_touching(&self, balls: &BallBatch) -> u64 {
         if self.quick.len() > SCAN_LIMIT {
@@ -842,6 +915,41 @@ impl Obstacles for ParryScene {
             }
         }
         hit
+    }
+
+    fn balls_clearance(&self, balls: &BallBatch, max: Real, out: &mut [Real; BallBatch::CAPACITY]) -> bool {
+        let n = balls.len();
+        out.fill(max);
+        let (mut lo, mut hi) = (Vector::splat(Real::MAX), Vector::splat(Real::MIN));
+        for j in 0..n {
+            let (c, r) = balls.ball(j);
+            let reach = r + self.margin + max.max(0.0);
+            if !(c.is_finite() && reach.is_finite()) {
+                return false;
+            }
+            lo = lo.min(c - Vector::splat(reach));
+            hi = hi.max(c + Vector::splat(reach));
+        }
+        if n == 0 {
+            return true;
+        }
+        // Only obstacles whose box meets the balls' box grown by `max` can come nearer.
+        if self.quick.len() <= SCAN_LIMIT {
+            let [x0, y0, z0, x1, y1, z1] = &self.boxes.bounds;
+            for i in 0..self.quick.len() {
+                if x0[i] > hi.x || y0[i] > hi.y || z0[i] > hi.z || x1[i] < lo.x || y1[i] < lo.y || z1[i] < lo.z {
+                    continue;
+                }
+                if !self.quick[i].clearance(balls, n, self.margin, out) {
+                    return false;
+                }
+            }
+            true
+        } else {
+            self.bvh
+                .intersect_aabb(&Aabb::new(lo, hi))
+                .all(|i| self.quick[i as usize].clearance(balls, n, self.margin, out))
+        }
     }
 
     fn first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleId> {

@@ -905,54 +905,8 @@ fn discretise_timed<S: Space>(
     }
 }
 
-/// Index of an invalid state among `flat` (`dim` per state), checked midpoints first and the
-/// two ends last, or `None` when all are valid.
+/// Index of an invalid state among `flat` (`dim` per state), which follow one another along
+/// the motion, or `None` when all are valid ([`StateValidator::first_invalid_along`]).
 pub(crate) fn first_invalid<V: StateValidator + ?Sized>(flat: &[f64], dim: usize, validator: &mut V) -> Option<usize> {
-    let n = flat.len() / dim.max(1);
-    if n == 0 {
-        return None;
-    }
-    let state = |i: usize| &flat[i * dim..(i + 1) * dim];
-    // Checking order: midpoints coarse to fine, then the two ends, handed to the validator a
-    // few states at a time so that it can compute them together. The group's states are
-    // copied into a buffer on the stack (on the heap only for spaces of over 32 dimensions).
-    const BATCH: usize = crate::motion::BATCH;
-    let mut stack = [0.0; BATCH * 32];
-    let mut heap = Vec::new();
-    let buf = if BATCH * dim <= stack.len() {
-        &mut stack[..BATCH * dim]
-    } else {
-        heap.resize(BATCH * dim, 0.0);
-        &mut heap[..]
-    };
-    let mut queue = std::collections::VecDeque::with_capacity(64);
-    queue.push_back((0usize, n - 1));
-    let mids = std::iter::from_fn(|| {
-        while let Some((lo, hi)) = queue.pop_front() {
-            if hi - lo >= 2 {
-                let mid = lo + (hi - lo) / 2;
-                queue.push_back((lo, mid));
-                queue.push_back((mid, hi));
-                return Some(mid);
-            }
-        }
-        None
-    });
-    let mut group = [0usize; BATCH];
-    let mut len = 0;
-    for i in mids.chain([n - 1, 0].into_iter().take(n.min(2))) {
-        buf[len * dim..(len + 1) * dim].copy_from_slice(state(i));
-        group[len] = i;
-        len += 1;
-        if len == BATCH {
-            if let Some(k) = validator.first_invalid(buf, dim) {
-                return Some(group[k]);
-            }
-            len = 0;
-        }
-    }
-    if len == 0 {
-        return None;
-    }
-    validator.first_invalid(&buf[..len * dim], dim).map(|k| group[k])
+    validator.first_invalid_along(flat, dim)
 }
