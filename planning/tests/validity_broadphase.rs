@@ -331,14 +331,10 @@ fn pocket_runs_match_brute_force() {
     assert!(valid > 20 && invalid > 1000, "{valid} valid / {invalid} invalid");
 }
 
-#[test]
-fn fetch_pocket_runs_match_brute_force() {
-    // The Fetch's torso moves links (the head) that are not ancestors of the arm's links: their
-    // poses go stale when a check is settled on the arm's ancestors alone.
-    let (chain, acm) = robot("fetch", "arm_with_torso", 300);
-    // Clutter in front of the robot, clear of its base and body.
-    let scene = ParryScene::new(
-        cluttered(6, 40)
+/// Random clutter in front of a Fetch, clear of its base and body.
+fn fetch_clutter(seed: u64) -> ParryScene {
+    ParryScene::new(
+        cluttered(seed, 40)
             .into_iter()
             .filter(|o| o.pose.translation.x > 0.0 && o.pose.translation.z > 0.4)
             .map(|mut o| {
@@ -346,7 +342,15 @@ fn fetch_pocket_runs_match_brute_force() {
                 o
             })
             .collect(),
-    );
+    )
+}
+
+#[test]
+fn fetch_pocket_runs_match_brute_force() {
+    // The Fetch's torso moves links (the head) that are not ancestors of the arm's links: their
+    // poses go stale when a check is settled on the arm's ancestors alone.
+    let (chain, acm) = robot("fetch", "arm_with_torso", 300);
+    let scene = fetch_clutter(6);
     assert!(scene.len() > 5);
     let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
     let mut r = Reference::new(&chain, &acm, scene);
@@ -512,16 +516,7 @@ fn motions_checked_along_match_brute_force() {
 fn fetch_motions_checked_along_match_brute_force() {
     // A prismatic torso, and links (the head) that the torso moves but are not the arm's.
     let (chain, acm) = robot("fetch", "arm_with_torso", 300);
-    let scene = ParryScene::new(
-        cluttered(9, 40)
-            .into_iter()
-            .filter(|o| o.pose.translation.x > 0.0 && o.pose.translation.z > 0.4)
-            .map(|mut o| {
-                o.pose.translation.x += 0.35;
-                o
-            })
-            .collect(),
-    );
+    let scene = fetch_clutter(9);
     let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
     let mut r = Reference::new(&chain, &acm, scene);
     let motions = short_motions(&chain, &mut r, 10, 100, 1.5);
