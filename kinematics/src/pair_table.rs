@@ -206,25 +206,9 @@ impl PairTable {
     /// assert!(!table.certainly_clear(&panda, &q));
     /// ```
     pub fn certainly_clear(&self, model: &RobotModel, q_full: &[f64]) -> bool {
-        let mut t = [0.0f64; 2];
-        for (t, ax) in t.iter_mut().zip(&self.axes) {
-            let Some(&v) = q_full.get(ax.var) else { return false };
-            *t = (v - ax.lower) / ax.range;
-            if !(*t >= 0.0 && *t <= 1.0) {
-                return false;
-            }
-        }
+        let Some(t) = self.unit(q_full) else { return false };
         for (k, cells) in self.levels.iter().enumerate() {
-            let mut index = 0usize;
-            let mut at = [0usize; 2];
-            // How far the link can have moved from its pose at the cell's centre.
-            let mut moved = SLACK;
-            for ((at, t), ax) in at.iter_mut().zip(t).zip(&self.axes) {
-                let n = ax.base << k;
-                *at = ((t * n as f64) as usize).min(n - 1);
-                index = index * n + *at;
-                moved += ((t * n as f64) - (*at as f64 + 0.5)).abs() * ax.range / n as f64 * ax.reach;
-            }
+            let (index, at, moved) = self.cell(&t, k);
             let Some(cell) = cells.get(index) else { return false };
             let mut bits = cell.load(Ordering::Relaxed);
             if bits == UNKNOWN {
@@ -236,6 +220,35 @@ impl PairTable {
             }
         }
         false
+    }
+
+    /// Where `q_full` lies along each joint's range, from 0 to 1; `None` outside the ranges
+    /// (or when `q_full` is too short).
+    fn unit(&self, q_full: &[f64]) -> Option<[f64; 2]> {
+        let mut t = [0.0f64; 2];
+        for (t, ax) in t.iter_mut().zip(&self.axes) {
+            *t = (q_full.get(ax.var)? - ax.lower) / ax.range;
+            if !(*t >= 0.0 && *t <= 1.0) {
+                return None;
+            }
+        }
+        Some(t)
+    }
+
+    /// The cell of `level` holding the configuration at `t` ([`PairTable::unit`]): its index,
+    /// its position along each joint, and how far the far link can have moved from its pose at
+    /// the cell's centre (plus the slack).
+    fn cell(&self, t: &[f64; 2], level: usize) -> (usize, [usize; 2], f64) {
+        let mut index = 0usize;
+        let mut at = [0usize; 2];
+        let mut moved = SLACK;
+        for ((at, t), ax) in at.iter_mut().zip(t).zip(&self.axes) {
+            let n = ax.base << level;
+            *at = ((t * n as f64) as usize).min(n - 1);
+            index = index * n + *at;
+            moved += ((t * n as f64) - (*at as f64 + 0.5)).abs() * ax.range / n as f64 * ax.reach;
+        }
+        (index, at, moved)
     }
 
     /// A lower bound on the distance between the two links in configuration `q_full`, from
@@ -256,24 +269,10 @@ impl PairTable {
     /// assert!(table.clearance_bound(&q).unwrap() > 0.0);
     /// ```
     pub fn clearance_bound(&self, q_full: &[f64]) -> Option<f64> {
-        let mut t = [0.0f64; 2];
-        for (t, ax) in t.iter_mut().zip(&self.axes) {
-            let &v = q_full.get(ax.var)?;
-            *t = (v - ax.lower) / ax.range;
-            if !(*t >= 0.0 && *t <= 1.0) {
-                return None;
-            }
-        }
+        let t = self.unit(q_full)?;
         let mut best: Option<f64> = None;
         for (k, cells) in self.levels.iter().enumerate() {
-            let mut index = 0usize;
-            let mut moved = SLACK;
-            for (t, ax) in t.iter().zip(&self.axes) {
-                let n = ax.base << k;
-                let at = ((t * n as f64) as usize).min(n - 1);
-                index = index * n + at;
-                moved += ((t * n as f64) - (at as f64 + 0.5)).abs() * ax.range / n as f64 * ax.reach;
-            }
+            let (index, _, moved) = self.cell(&t, k);
             let bits = cells.get(index)?.load(Ordering::Relaxed);
             if bits != UNKNOWN {
                 let bound = f64::from(f32::from_bits(bits)) - moved;

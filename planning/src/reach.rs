@@ -1,5 +1,5 @@
 //! How far a robot's links can move when its chain's joints move: the bound behind the free
-//! radius of a checked state ([`crate::validity::RobotValidity`]'s
+//! region of a checked state ([`crate::validity::RobotValidity`]'s
 //! [`first_invalid_along`](crate::validity::StateValidator::first_invalid_along)).
 //!
 //! Turning a revolute joint by `Δ` moves a point `p` of a link below it by at most
@@ -11,8 +11,9 @@
 //! links share turn both rigidly, so the distance between a point of each changes only with the
 //! joints that one of them has and the other has not.
 //!
-//! Every bound is then scaled into one weighted distance `Σⱼ wⱼ·|Δⱼ|` (with `wⱼ` the largest
-//! `Rⱼ` of any link or pair), so that a state's free radius is one number.
+//! Each link, pair and pair table keeps its own row of `Rⱼ`. One weighted distance
+//! `Σⱼ wⱼ·|Δⱼ|` (with `wⱼ` the largest `Rⱼ` of any row) bounds them all up to each row's scale:
+//! a checked state uses it to leave out the constraints that no state of its stretch can break.
 
 use std::collections::HashMap;
 

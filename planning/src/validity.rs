@@ -349,7 +349,7 @@ pub struct RobotValidity {
     lane_poses: [Vec<Isometry3<f64>>; 4],
     /// Whether the lane buffers hold the current poses of the links that do not move.
     lanes_current: bool,
-    /// Displacement bounds for free radii ([`StateValidator::first_invalid_along`]).
+    /// Displacement bounds for free regions ([`StateValidator::first_invalid_along`]).
     reach: Reach,
     /// Per lane: the free region of the state last found valid in it, as (bound row,
     /// clearance) constraints ([`RobotValidity::free_region`]).
@@ -361,10 +361,10 @@ pub struct RobotValidity {
     stretches: std::collections::VecDeque<(usize, usize)>,
 }
 
-/// States a stretch must hold before a check along a motion measures the free radius of its
+/// States a stretch must hold before a check along a motion finds the free region of its
 /// middle state ([`RobotValidity::first_invalid_along`]).
 const FREE_RADIUS_MIN_STATES: usize = 3;
-/// Clearance (m) a free radius leaves unused: covers f32 rounding in the distances.
+/// Clearance (m) a free region leaves unused: covers f32 rounding in the distances.
 const FREE_RADIUS_SLACK: f64 = 1e-4;
 
 /// Checks in a row settled by the same part of a link after which the next check first
@@ -995,6 +995,16 @@ impl RobotValidity {
         if !self.attached.is_empty() || cap.is_nan() || cap <= 0.0 || self.broad.moving.len() > BallBatch::CAPACITY {
             return false;
         }
+        let (reach, next) = (&self.reach, &self.next_to[lane][..self.chain.dof()]);
+        // Keeps the constraint that row `row` moves less than `c`, unless no motion within
+        // `cap` can break it; `false` when it cannot even hold the state's neighbours.
+        let admit = |row: Row, c: f64, free: &mut Vec<(Row, f64)>| {
+            if c >= reach.scale(row) * cap {
+                return true;
+            }
+            free.push((row, c));
+            c > reach.motion(row, next)
+        };
         let b = &mut self.broad;
         let mut clearance = [0.0; BallBatch::CAPACITY];
         // The moving links' bounding balls in one batch: a link whose ball stays clear is clear.
@@ -1056,11 +1066,8 @@ impl RobotValidity {
                 if c <= 0.0 {
                     return false;
                 }
-                if c < self.reach.scale(Row::Link(i)) * cap {
-                    if c <= self.reach.motion(Row::Link(i), &self.next_to[lane][..self.chain.dof()]) {
-                        return false;
-                    }
-                    free.push((Row::Link(i), c));
+                if !admit(Row::Link(i), c, free) {
+                    return false;
                 }
             }
             start = end;
@@ -1075,11 +1082,8 @@ impl RobotValidity {
             }
             let apart = (b.world_center[a] - b.world_center[l]).norm() - b.radius[a] - b.radius[l] - FREE_RADIUS_SLACK;
             if apart > 0.0 {
-                if apart < scale * cap {
-                    if apart <= self.reach.motion(Row::Pair(p), &self.next_to[lane][..self.chain.dof()]) {
-                        return false;
-                    }
-                    free.push((Row::Pair(p), apart));
+                if !admit(Row::Pair(p), apart, free) {
+                    return false;
                 }
                 continue;
             }
@@ -1091,14 +1095,8 @@ impl RobotValidity {
             if let Some(c) = tabled
                 && c > 0.0
             {
-                if c < self.reach.scale(Row::Table(p)) * cap {
-                    if c <= self
-                        .reach
-                        .motion(Row::Table(p), &self.next_to[lane][..self.chain.dof()])
-                    {
-                        return false;
-                    }
-                    free.push((Row::Table(p), c));
+                if !admit(Row::Table(p), c, free) {
+                    return false;
                 }
                 continue;
             }
@@ -1121,14 +1119,8 @@ impl RobotValidity {
                 }
             }
             let c = least - FREE_RADIUS_SLACK;
-            if c.is_nan() || c <= 0.0 {
+            if c.is_nan() || c <= 0.0 || !admit(Row::Pair(p), c, free) {
                 return false;
-            }
-            if c < scale * cap {
-                if c <= self.reach.motion(Row::Pair(p), &self.next_to[lane][..self.chain.dof()]) {
-                    return false;
-                }
-                free.push((Row::Pair(p), c));
             }
         }
         true
@@ -1706,8 +1698,10 @@ impl StateValidator for RobotValidity {
         self.checks
     }
 
-    /// Skips the states that a checked state's free radius proves valid (see
-    /// [`RobotValidity`]): along a fine motion most states lie well within one.
+    /// Skips the states that a checked neighbour's free region proves valid: where each moving
+    /// link's covering balls stay clear of the obstacles and each checked pair stays apart,
+    /// given how far the joints' change can move them. Along a fine motion most states lie
+    /// well within one.
     fn first_invalid_along(&mut self, states: &[f64], dim: usize) -> Option<usize> {
         let dim = dim.max(1);
         if dim != self.chain.dof() || dim > 32 || states.len() / dim < FREE_RADIUS_MIN_STATES {

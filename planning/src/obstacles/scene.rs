@@ -672,6 +672,14 @@ fn balls_gap2<L: Lane>(dx: L, dy: L, dz: L, rc: Real, r: L) -> (L, L) {
     (dx * dx + dy * dy + dz * dz, reach * reach)
 }
 
+/// Lanes `o..o + 8` of a batch's column.
+#[inline(always)]
+fn load8(v: &[Real; BallBatch::CAPACITY], o: usize) -> f32x8 {
+    let mut lane = [0.0; 8];
+    lane.copy_from_slice(&v[o..o + 8]);
+    f32x8::new(lane)
+}
+
 impl Quick {
     fn of(o: &Obstacle) -> Self {
         let s = &*o.shape;
@@ -743,16 +751,11 @@ impl Quick {
         /// Bits of the lanes where `touch(x, y, z, r)` holds, eight balls per step.
         #[inline(always)]
         fn lanes(b: &BallBatch, n: usize, margin: Real, touch: impl Fn(f32x8, f32x8, f32x8, f32x8) -> f32x8) -> u64 {
-            let load = |v: &[Real; BallBatch::CAPACITY], o: usize| {
-                let mut lane = [0.0; 8];
-                lane.copy_from_slice(&v[o..o + 8]);
-                f32x8::new(lane)
-            };
             let margin = f32x8::splat(margin);
             let mut hit = 0u64;
             for chunk in 0..n.div_ceil(8) {
                 let o = chunk * 8;
-                let m = touch(load(&b.x, o), load(&b.y, o), load(&b.z, o), load(&b.r, o) + margin);
+                let m = touch(load8(&b.x, o), load8(&b.y, o), load8(&b.z, o), load8(&b.r, o) + margin);
                 hit |= u64::from(m.to_bitmask()) << o;
             }
             hit
@@ -794,9 +797,7 @@ impl Quick {
             Quick::Other => return None,
         })
     }
-}
 
-impl Quick {
     /// Lowers `out[j]` to the clearance of ball `j` of `b` (surface to this obstacle, less
     /// `margin`) for the balls `0..n`, eight balls per step; `false` when parry would have to
     /// measure it.
@@ -811,16 +812,11 @@ impl Quick {
             out: &mut [Real; BallBatch::CAPACITY],
             gap: impl Fn(f32x8, f32x8, f32x8) -> f32x8,
         ) {
-            let load = |v: &[Real; BallBatch::CAPACITY], o: usize| {
-                let mut lane = [0.0; 8];
-                lane.copy_from_slice(&v[o..o + 8]);
-                f32x8::new(lane)
-            };
             let margin = f32x8::splat(margin);
             for chunk in 0..n.div_ceil(8) {
                 let o = chunk * 8;
-                let c = gap(load(&b.x, o), load(&b.y, o), load(&b.z, o)) - load(&b.r, o) - margin;
-                let least = c.min(load(out, o)).to_array();
+                let c = gap(load8(&b.x, o), load8(&b.y, o), load8(&b.z, o)) - load8(&b.r, o) - margin;
+                let least = c.min(load8(out, o)).to_array();
                 out[o..o + 8].copy_from_slice(&least);
             }
         }
