@@ -871,6 +871,10 @@ impl<S: Space, V: StateValidator + ?Sized> StateValidator for Avoiding<'_, S, V>
     fn checks(&self) -> u64 {
         self.inner.checks()
     }
+
+    fn tool_step(&mut self, q: &[f64], axis: usize, length: f64, out: &mut [f64]) -> bool {
+        self.inner.tool_step(q, axis, length, out)
+    }
 }
 
 /// `path` with edge `edge` (from state `edge` to `edge + 1`) re-planned around `bad`, a

@@ -123,6 +123,31 @@ pub trait StateValidator {
     fn first_invalid_along(&mut self, states: &[f64], dim: usize) -> Option<usize> {
         bisect_first_invalid(self, states, dim)
     }
+
+    /// A short straight move of the robot's tool from `q`, for planners that need to leave a
+    /// tight spot ([`Escape`](crate::birrt::Escape)): writes into `out` the configuration
+    /// that moves the tool (the planned chain's last link) by `length` metres along one of
+    /// its own axes with its orientation held, to first order (joints that would pass a limit
+    /// stop at it), and returns true; false when there is no such move (the default: the
+    /// validator knows no robot) or the limits stop every joint. `axis` 0–2 are the tool frame's x, y and z, 3–5 the same axes
+    /// negated. A grasp between shelf boards is left by backing straight out along the
+    /// gripper's axis: a narrow channel in joint space that random steps seldom find. The
+    /// result is not checked for validity.
+    ///
+    /// ```
+    /// use hearth_planning::validity::StateValidator;
+    /// struct Free;
+    /// impl StateValidator for Free {
+    ///     fn is_valid(&mut self, _: &[f64]) -> bool { true }
+    ///     fn checks(&self) -> u64 { 0 }
+    /// }
+    /// let mut out = [0.0; 2];
+    /// assert!(!Free.tool_step(&[0.0, 0.0], 0, 0.01, &mut out)); // no robot, no tool
+    /// ```
+    fn tool_step(&mut self, q: &[f64], axis: usize, length: f64, out: &mut [f64]) -> bool {
+        let _ = (q, axis, length, out);
+        false
+    }
 }
 
 /// [`StateValidator::first_invalid_along`]'s default: midpoints coarse to fine, then the two
@@ -366,6 +391,9 @@ pub struct RobotValidity {
 const FREE_RADIUS_MIN_STATES: usize = 3;
 /// Clearance (m) a free region leaves unused: covers f32 rounding in the distances.
 const FREE_RADIUS_SLACK: f64 = 1e-4;
+/// Damping (m², added to the diagonal of J·Jᵀ) of [`RobotValidity`]'s tool steps: keeps the
+/// joint step bounded near singular configurations.
+const TOOL_STEP_DAMPING: f64 = 1e-4;
 
 /// Checks in a row settled by the same part of a link after which the next check first
 /// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
@@ -1679,6 +1707,30 @@ impl RobotValidity {
     }
 }
 
+impl RobotValidity {
+    /// The link [`StateValidator::tool_step`] moves: the chain's tip when it names one, else
+    /// the deepest link its joints move (the child of its last joint down the tree).
+    fn tool(&self) -> Option<usize> {
+        if let Some(tip) = self.chain.tip() {
+            return Some(tip);
+        }
+        let (links, joints) = (self.model.links(), self.model.joints());
+        let depth = |mut l: usize| {
+            let mut d = 0usize;
+            while let Some(j) = links[l].parent_joint {
+                l = joints[j].parent;
+                d += 1;
+            }
+            d
+        };
+        self.chain
+            .joints()
+            .iter()
+            .map(|&j| joints[j].child)
+            .max_by_key(|&l| depth(l))
+    }
+}
+
 impl StateValidator for RobotValidity {
     fn is_valid(&mut self, q: &[f64]) -> bool {
         self.checks += 1;
@@ -1708,6 +1760,48 @@ impl StateValidator for RobotValidity {
             return bisect_first_invalid(self, states, dim);
         }
         self.first_invalid_along_free(states, dim)
+    }
+
+    /// One damped least-squares step through the chain tip's Jacobian (at the current
+    /// reference, base and attachments), the tip's origin moving by `length` along its axis
+    /// and its angular velocity held at zero.
+    fn tool_step(&mut self, q: &[f64], axis: usize, length: f64, out: &mut [f64]) -> bool {
+        let dof = self.chain.dof();
+        let Some(tip) = self.tool() else {
+            return false;
+        };
+        if axis >= 6 || q.len() != dof || out.len() != dof || !length.is_finite() || !q.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let mut full = self.q_full.clone();
+        self.chain.scatter(q, &mut full);
+        let mut poses = self.model.pose_buffer();
+        let mut jacobian = nalgebra::Matrix6xX::zeros(dof);
+        if self.model.fk_from(&self.base, &full, &mut poses).is_err()
+            || self
+                .model
+                .jacobian(&poses, &self.chain, tip, &nalgebra::Vector3::zeros(), &mut jacobian)
+                .is_err()
+        {
+            return false;
+        }
+        let mut local = nalgebra::Vector3::zeros();
+        local[axis % 3] = if axis < 3 { length } else { -length };
+        let along = poses[tip].rotation * local;
+        let twist = nalgebra::Vector6::new(along.x, along.y, along.z, 0.0, 0.0, 0.0);
+        let damped = &jacobian * jacobian.transpose() + nalgebra::Matrix6::identity() * TOOL_STEP_DAMPING;
+        let Some(weights) = damped.lu().solve(&twist) else {
+            return false;
+        };
+        let dq = jacobian.transpose() * weights;
+        for ((o, q), d) in out.iter_mut().zip(q).zip(dq.iter()) {
+            *o = q + d;
+        }
+        if !out.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        self.chain.clamp(out);
+        out != q
     }
 
     /// Four states at a time share one four-lane forward kinematics pass (bit for bit the

@@ -240,3 +240,97 @@ fn a_new_reference_moves_the_links_above_it() {
     v.set_reference(&low).unwrap();
     assert!(v.is_valid(&q));
 }
+
+/// The tool's pose at chain configuration `q` (the rest of the robot at its neutral
+/// configuration), with the robot's base at `base`.
+fn tool_pose(chain: &Chain, q: &[f64], tool: usize, base: &Isometry3<f64>) -> Isometry3<f64> {
+    let model = chain.model();
+    let mut full = model.neutral_configuration();
+    chain.scatter(q, &mut full);
+    let mut poses = model.pose_buffer();
+    model.fk_from(base, &full, &mut poses).unwrap();
+    poses[tool]
+}
+
+/// `tool_step` moves the chain's tool by the length asked along its own axis and keeps its
+/// orientation, to first order: the Panda's named arm moves its TCP; a chain named by its
+/// joints (the Fetch's torso and arm, as MotionBenchMaker plans them), whose tip is not named,
+/// moves its deepest link. It counts no check, keeps to the joint limits and refuses bad input.
+#[test]
+fn tool_steps_move_the_tool_straight_along_its_axes() {
+    let check = |v: &mut RobotValidity, q: &[f64], tool: usize, base: Isometry3<f64>| {
+        let chain = v.chain().clone();
+        let before = tool_pose(&chain, q, tool, &base);
+        let mut out = vec![0.0; q.len()];
+        let checks = v.checks();
+        for axis in 0..6 {
+            assert!(v.tool_step(q, axis, 0.01, &mut out), "axis {axis}");
+            let after = tool_pose(&chain, &out, tool, &base);
+            let mut local = nalgebra::Vector3::zeros();
+            local[axis % 3] = if axis < 3 { 0.01 } else { -0.01 };
+            let wanted = before.translation.vector + before.rotation * local;
+            let off = (after.translation.vector - wanted).norm();
+            let turned = before.rotation.angle_to(&after.rotation);
+            assert!(
+                off < 5e-4 && turned < 1e-3,
+                "axis {axis}: {off} m off, turned {turned} rad"
+            );
+        }
+        assert_eq!(v.checks(), checks, "a tool step is not a check");
+    };
+    let mut v = panda(Vec::new());
+    let tcp = v.chain().model().link_index("panda_hand_tcp").unwrap();
+    check(&mut v, &FOLDED, tcp, Isometry3::identity());
+    let base = Isometry3::new(nalgebra::Vector3::new(1.0, -2.0, 0.0), nalgebra::Vector3::z() * 1.2);
+    v.set_base(base);
+    check(&mut v, &FOLDED, tcp, base);
+
+    let m = RobotModel::builtin("fetch").unwrap();
+    let joints = [
+        "torso_lift_joint",
+        "shoulder_pan_joint",
+        "shoulder_lift_joint",
+        "upperarm_roll_joint",
+        "elbow_flex_joint",
+        "forearm_roll_joint",
+        "wrist_flex_joint",
+        "wrist_roll_joint",
+    ];
+    let chain = Chain::new(&m, &joints).unwrap();
+    assert_eq!(chain.tip(), None);
+    let acm = SelfCollisionMatrix::compute(
+        &m,
+        &SelfCollisionSettings {
+            samples: 300,
+            ..Default::default()
+        },
+    );
+    let mut fetch = RobotValidity::new(chain, acm, Arc::new(ParryScene::new(Vec::new())));
+    let wrist = m.link_index("wrist_roll_link").unwrap();
+    let reach = [0.2, 0.5, -0.3, 0.4, 1.2, 0.3, 0.8, 0.1];
+    check(&mut fetch, &reach, wrist, Isometry3::identity());
+
+    // The limits hold: the Panda's elbow at its upper limit stays there or below.
+    let arm = v.chain().clone();
+    let mut q = FOLDED;
+    q[3] = arm.upper()[3];
+    let mut out = [0.0; 7];
+    for axis in 0..6 {
+        if v.tool_step(&q, axis, 0.05, &mut out) {
+            assert!(
+                out.iter()
+                    .zip(arm.lower().iter().zip(arm.upper()))
+                    .all(|(x, (lo, hi))| (lo..=hi).contains(&x))
+            );
+        }
+    }
+    // Bad input: no step, `out` untouched.
+    let mut out = [7.0; 7];
+    let mut nan = FOLDED;
+    nan[2] = f64::NAN;
+    assert!(!v.tool_step(&nan, 0, 0.01, &mut out));
+    assert!(!v.tool_step(&FOLDED, 6, 0.01, &mut out));
+    assert!(!v.tool_step(&FOLDED, 0, f64::INFINITY, &mut out));
+    assert!(!v.tool_step(&FOLDED[..6], 0, 0.01, &mut out[..6]));
+    assert_eq!(out, [7.0; 7]);
+}
