@@ -32,14 +32,17 @@ use crate::{BiRrt, LazyPrm};
 /// nearest neighbours of later samples. A helper that has not grown for `reset` of its turns
 /// is replaced by a fresh one.
 ///
-/// A new helper first walks each root's tool straight along the tool's six axis directions,
-/// in steps of 1 cm for up to 40 cm, while the states and motions stay valid
+/// A tree's first helper begins by walking each root's tool straight along the tool's six
+/// axis directions, in steps of 1 cm for up to 40 cm, while the states and motions stay valid
 /// ([`StateValidator::tool_step`], which [`RobotValidity`](crate::validity::RobotValidity)
 /// implements through the Jacobian), and keeps the walks as its first branches: a grasp
 /// between shelf boards is left by backing straight out, a narrow channel in joint space.
-/// On MotionBenchMaker's Fetch problems, over three seeds, the 404 plans in which the escape
-/// fired took 0.65–0.76 of the time without the walks (geometric means; faster in 239 of
-/// them, `docs/planning-log.md`). Validators that know no tool add nothing.
+/// On MotionBenchMaker's Fetch problems (BiRRT, seeds 0 and 1, every plan capped at 300,000
+/// iterations so that both builds make the same plans), the 257 plans in which the escape
+/// fired needed 0.72–0.77 of the iterations without the walks (geometric means; fewer in 148
+/// of them, more in 82; `docs/planning-log.md`). Validators that know no tool add nothing.
+/// The helpers that replace it after a [`reset`](Escape::reset) do not walk again: their
+/// walks would be the same branches.
 ///
 /// [`LazyPrm`] uses the same helper for a query end wedged in a small part of its roadmap
 /// ([`LazyPrmSettings::escape`](crate::lazy_prm::LazyPrmSettings::escape)): there `range` is
@@ -78,7 +81,8 @@ pub struct Escape {
     /// which the helper is dropped, and the next helper turn starts a new one from the
     /// tree's roots with an empty channel. A helper can wall itself in: its frontier ends in a
     /// cul-de-sac of the pocket, whose states stay the nearest to every sample, while the way
-    /// out starts near the roots. A fresh helper draws its first steps anew. `u64::MAX`
+    /// out starts near the roots. A fresh helper draws its first steps anew (and does not
+    /// repeat the first helper's tool walks). `u64::MAX`
     /// keeps a helper for the whole plan.
     pub reset: u64,
 }
@@ -249,9 +253,10 @@ impl Escape {
     /// The helper that takes this turn of a tree (or a roadmap's wedged part) that has grown by
     /// `grown` states in `attempts` turns, with the step lengths of that turn for a planner step
     /// `range` (the helper's own step, the joining step, and the probe's when the turn is a
-    /// probe); `None` when the turn is the tree's own. The helper in `slot` is dropped first
-    /// when it has been idle for [`reset`](Escape::reset) turns; a stuck tree's helper is made
-    /// by `new` on first use. Both planners draw from `rng` in the same order through here.
+    /// probe); `None` when the turn is the tree's own. The helper in `slot` is replaced first
+    /// by a fresh one from `new`, which does not walk its tools ([`Helper::retreat`]), when it
+    /// has been idle for [`reset`](Escape::reset) turns; a stuck tree's first helper is made by
+    /// `new` on first use. Both planners draw from `rng` in the same order through here.
     pub(crate) fn helper_turn<'h, R: Rng + ?Sized>(
         &self,
         slot: &'h mut Option<Helper>,
@@ -260,14 +265,19 @@ impl Escape {
         rng: &mut R,
         new: impl FnOnce() -> Helper,
     ) -> Option<(&'h mut Helper, Steps)> {
+        let mut new = Some(new);
         if slot.as_ref().is_some_and(|h| h.idle >= self.reset) {
-            *slot = None;
+            // The fresh helper does not retreat again: its walks would be the same branches,
+            // and a walled-in helper is replaced to draw its first steps anew.
+            let mut fresh = new.take().map(|f| f()).expect("not taken yet");
+            fresh.retreated = true;
+            *slot = Some(fresh);
         }
         let stuck = attempts >= self.after && grown.saturating_mul(self.stuck_ratio) < attempts;
         if !(stuck && rng.random::<f64>() < self.share) {
             return None;
         }
-        let helper = slot.get_or_insert_with(new);
+        let helper = slot.get_or_insert_with(|| new.take().map(|f| f()).expect("no helper made yet"));
         let probe = (self.probe > 0.0 && rng.random::<f64>() < self.probe).then(|| self.step * range / 3.0);
         let (short, long) = (self.step * range, self.join * range);
         Some((helper, Steps { short, long, probe }))
@@ -423,6 +433,64 @@ impl Helper {
 mod tests {
     use super::*;
     use crate::space::JointSpace;
+
+    /// Free everywhere; its tool steps move along x and are counted.
+    struct Tool(u64);
+    impl StateValidator for Tool {
+        fn is_valid(&mut self, _: &[f64]) -> bool {
+            true
+        }
+        fn checks(&self) -> u64 {
+            0
+        }
+        fn tool_step(&mut self, q: &[f64], axis: usize, length: f64, out: &mut [f64]) -> bool {
+            self.0 += 1;
+            out.copy_from_slice(q);
+            out[0] += if axis < 3 { length } else { -length };
+            axis.is_multiple_of(3)
+        }
+    }
+
+    /// A tree's first helper walks its root's tool before its first turn (two walks of
+    /// `RETREAT_STEPS` steps, along x and back, and one refused step for each other axis);
+    /// the helper that replaces it after `reset` idle turns does not walk again.
+    #[test]
+    fn only_a_trees_first_helper_walks_its_tools() {
+        let space = JointSpace::new(&[-2.0; 2], &[2.0; 2], &[false; 2]).unwrap();
+        let mut motion = MotionValidator::new(space, 0.01);
+        let mut tool = Tool(0);
+        let escape = Escape {
+            after: 0,
+            stuck_ratio: 1,
+            share: 0.999_999,
+            probe: 0.0,
+            reset: 3,
+            ..Escape::default()
+        };
+        let mut into = crate::planner::Tree::new(2);
+        into.add(&[0.0, 0.0], None);
+        struct Into<'a>(&'a mut Tree);
+        impl Grows for Into<'_> {
+            fn grow<S: Space>(&mut self, _: &S, q: &[f64], parent: usize) -> usize {
+                self.0.add(q, Some(parent))
+            }
+        }
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(3);
+        let mut slot = None;
+        let new = || Helper::new([(0, &[0.0, 0.0][..])], 2);
+        // A target straight along y: no step towards it is refused, but the walks along x
+        // come first.
+        let (h, steps) = escape.helper_turn(&mut slot, (1, 0), 0.1, &mut rng, new).unwrap();
+        h.turn(&mut motion, &mut tool, &mut Into(&mut into), &[0.0, 1.0], steps);
+        assert_eq!(tool.0, 2 * RETREAT_STEPS as u64 + 4);
+        let walked = 1 + 2 * RETREAT_STEPS;
+        assert!(slot.as_ref().unwrap().tree.len() >= walked);
+        slot.as_mut().unwrap().idle = escape.reset;
+        let (h, steps) = escape.helper_turn(&mut slot, (1, 0), 0.1, &mut rng, new).unwrap();
+        assert_eq!(h.tree.len(), 1, "a fresh helper");
+        h.turn(&mut motion, &mut tool, &mut Into(&mut into), &[0.0, 1.0], steps);
+        assert_eq!(tool.0, 2 * RETREAT_STEPS as u64 + 4, "no second walk");
+    }
 
     /// A channel that has only seen free directions in the x-y plane steers a target off that
     /// plane back into it (up to the floor), keeps the displacement's length and stays in
