@@ -408,16 +408,23 @@ fn slab() -> Region {
     }
 }
 
-/// In [`slab`], the helper's channel (`Escape::probe`) learns the four thin directions from
-/// its probes and steers its steps along the slab: with the same streams it reaches the goal
-/// in under half the iterations it needs without the channel.
-#[test]
-fn slab_goal_birrt_escape_channel() {
+/// [`slab`]'s space (0 to 10 in each of six coordinates) and the query, from outside the slab to
+/// a goal deep inside it.
+fn slab_problem() -> (JointSpace, PlanRequest) {
     let space = JointSpace::new(&[0.0; 6], &[10.0; 6], &[false; 6]).unwrap();
     let request = PlanRequest::new(
         vec![8.0, 2.0, 2.0, 8.0, 2.0, 8.0],
         Goal::Config(vec![0.5, 5.0, 5.0, 5.0, 5.0, 5.0]),
     );
+    (space, request)
+}
+
+/// In [`slab`], the helper's channel (`Escape::probe`) learns the four thin directions from
+/// its probes and steers its steps along the slab: with the same streams it reaches the goal
+/// in under half the iterations it needs without the channel.
+#[test]
+fn slab_goal_birrt_escape_channel() {
+    let (space, request) = slab_problem();
     let with = |probe| BiRrt {
         range: Some(1.0),
         escape: Some(Escape {
@@ -489,11 +496,7 @@ impl StateValidator for ToolSlab {
 /// thin coordinates at the goal's).
 #[test]
 fn slab_goal_escape_retreats_along_the_tool() {
-    let space = JointSpace::new(&[0.0; 6], &[10.0; 6], &[false; 6]).unwrap();
-    let request = PlanRequest::new(
-        vec![8.0, 2.0, 2.0, 8.0, 2.0, 8.0],
-        Goal::Config(vec![0.5, 5.0, 5.0, 5.0, 5.0, 5.0]),
-    );
+    let (space, request) = slab_problem();
     let validator = |tool| ToolSlab { slab: slab(), tool };
     // A tree counts as stuck after 1,000 turns (10,000 by default), so that the iterations
     // compared are mostly the escape's.

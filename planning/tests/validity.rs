@@ -286,16 +286,8 @@ fn tool_steps_move_the_tool_straight_along_its_axes() {
     check(&mut v, &FOLDED, tcp, base);
 
     let m = RobotModel::builtin("fetch").unwrap();
-    let joints = [
-        "torso_lift_joint",
-        "shoulder_pan_joint",
-        "shoulder_lift_joint",
-        "upperarm_roll_joint",
-        "elbow_flex_joint",
-        "forearm_roll_joint",
-        "wrist_flex_joint",
-        "wrist_roll_joint",
-    ];
+    // The named chain's joints, without its tip.
+    let joints = Chain::named(&m, "arm_with_torso").unwrap().joint_names().to_vec();
     let chain = Chain::new(&m, &joints).unwrap();
     assert_eq!(chain.tip(), None);
     let acm = SelfCollisionMatrix::compute(
