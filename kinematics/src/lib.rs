@@ -51,6 +51,7 @@ pub use chain::{Chain, wrap_angle};
 pub use convert::{from_pose, to_pose, to_vector};
 pub use error::{KinematicsError, Result};
 pub use fk::FkSubset;
+pub use ik::dls::damped_least_squares_step;
 pub use ik::{IkError, IkMethod, IkSettings, IkSolution, IkSolver, IkTarget};
 pub use mesh::{MeshCollision, load_mesh};
 pub use model::{

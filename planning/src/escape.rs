@@ -265,19 +265,19 @@ impl Escape {
         rng: &mut R,
         new: impl FnOnce() -> Helper,
     ) -> Option<(&'h mut Helper, Steps)> {
-        let mut new = Some(new);
-        if slot.as_ref().is_some_and(|h| h.idle >= self.reset) {
-            // The fresh helper does not retreat again: its walks would be the same branches,
-            // and a walled-in helper is replaced to draw its first steps anew.
-            let mut fresh = new.take().map(|f| f()).expect("not taken yet");
-            fresh.retreated = true;
-            *slot = Some(fresh);
-        }
         let stuck = attempts >= self.after && grown.saturating_mul(self.stuck_ratio) < attempts;
         if !(stuck && rng.random::<f64>() < self.share) {
             return None;
         }
-        let helper = slot.get_or_insert_with(|| new.take().map(|f| f()).expect("no helper made yet"));
+        // An idle helper is only counted up on its own turns, so it is replaced at the next
+        // one. The fresh helper does not walk again: its walks would be the same branches,
+        // and a walled-in helper is replaced to draw its first steps anew.
+        let replaced = slot.as_ref().is_some_and(|h| h.idle >= self.reset);
+        if replaced {
+            *slot = None;
+        }
+        let helper = slot.get_or_insert_with(new);
+        helper.retreated |= replaced;
         let probe = (self.probe > 0.0 && rng.random::<f64>() < self.probe).then(|| self.step * range / 3.0);
         let (short, long) = (self.step * range, self.join * range);
         Some((helper, Steps { short, long, probe }))

@@ -391,9 +391,9 @@ pub struct RobotValidity {
 const FREE_RADIUS_MIN_STATES: usize = 3;
 /// Clearance (m) a free region leaves unused: covers f32 rounding in the distances.
 const FREE_RADIUS_SLACK: f64 = 1e-4;
-/// Damping (m², added to the diagonal of J·Jᵀ) of [`RobotValidity`]'s tool steps: keeps the
-/// joint step bounded near singular configurations.
-const TOOL_STEP_DAMPING: f64 = 1e-4;
+/// Damping λ (m; λ² is added to the diagonal of J·Jᵀ) of [`RobotValidity`]'s tool steps:
+/// keeps the joint step bounded near singular configurations.
+const TOOL_STEP_DAMPING: f64 = 1e-2;
 
 /// Checks in a row settled by the same part of a link after which the next check first
 /// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
@@ -1788,17 +1788,12 @@ impl StateValidator for RobotValidity {
         let mut local = nalgebra::Vector3::zeros();
         local[axis % 3] = if axis < 3 { length } else { -length };
         let along = poses[tip].rotation * local;
-        let twist = nalgebra::Vector6::new(along.x, along.y, along.z, 0.0, 0.0, 0.0);
-        let damped = &jacobian * jacobian.transpose() + nalgebra::Matrix6::identity() * TOOL_STEP_DAMPING;
-        let Some(weights) = damped.lu().solve(&twist) else {
+        let twist = [along.x, along.y, along.z, 0.0, 0.0, 0.0];
+        if !hearth_kinematics::damped_least_squares_step(&jacobian, 6, &twist, TOOL_STEP_DAMPING, out) {
             return false;
-        };
-        let dq = jacobian.transpose() * weights;
-        for ((o, q), d) in out.iter_mut().zip(q).zip(dq.iter()) {
-            *o = q + d;
         }
-        if !out.iter().all(|v| v.is_finite()) {
-            return false;
+        for (o, q) in out.iter_mut().zip(q) {
+            *o += q;
         }
         self.chain.clamp(out);
         out != q

@@ -2,9 +2,29 @@
 
 use nalgebra::{Matrix3, Matrix6, Matrix6xX, Vector3, Vector6};
 
-/// `dq = Jᵀ (J Jᵀ + λ² I)⁻¹ e` over the first `rows` rows (3: position only, 6: full pose).
-/// Returns `false` if the damped normal matrix is singular. Does not allocate.
-pub(crate) fn step(j: &Matrix6xX<f64>, rows: usize, e: &[f64; 6], lambda: f64, dq: &mut [f64]) -> bool {
+/// One damped-least-squares step: `dq = Jᵀ (J Jᵀ + λ² I)⁻¹ e` over the first `rows` rows of
+/// the Jacobian `j` (3: position only, 6: full pose; rows 0–2 linear, 3–5 angular, as
+/// [`RobotModel::jacobian`](crate::RobotModel::jacobian) writes them), for the task-space
+/// change `e` and the damping `lambda`. Writes the first `j.ncols()` entries of `dq`; returns
+/// `false` if the damped normal matrix is singular or `dq` is not finite. Does not allocate.
+///
+/// ```
+/// use hearth_kinematics::{damped_least_squares_step, Chain, RobotModel};
+/// use nalgebra::{Matrix6xX, Vector3};
+/// let panda = RobotModel::builtin("panda").unwrap();
+/// let arm = Chain::named(&panda, "arm").unwrap();
+/// let mut poses = panda.pose_buffer();
+/// panda.fk(&panda.neutral_configuration(), &mut poses).unwrap();
+/// let mut j = Matrix6xX::zeros(arm.dof());
+/// panda.jacobian(&poses, &arm, arm.tip().unwrap(), &Vector3::zeros(), &mut j).unwrap();
+/// // 1 mm up, orientation held.
+/// let e = [0.0, 0.0, 0.001, 0.0, 0.0, 0.0];
+/// let mut dq = [0.0; 7];
+/// assert!(damped_least_squares_step(&j, 6, &e, 1e-2, &mut dq));
+/// let moved = &j * nalgebra::DVector::from_row_slice(&dq);
+/// assert!((moved[2] - 0.001).abs() < 1e-5 && moved[0].abs() < 1e-5);
+/// ```
+pub fn damped_least_squares_step(j: &Matrix6xX<f64>, rows: usize, e: &[f64; 6], lambda: f64, dq: &mut [f64]) -> bool {
     let n = j.ncols();
     let l2 = lambda * lambda;
     if rows == 3 {

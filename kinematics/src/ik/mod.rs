@@ -1,6 +1,6 @@
 //! Inverse kinematics: damped least squares or a joint-limit QP, with random restarts.
 
-mod dls;
+pub(crate) mod dls;
 mod qp;
 
 use std::time::{Duration, Instant};
@@ -534,7 +534,7 @@ impl IkSolver {
                         s.max_step,
                         &mut self.dq,
                     ),
-                    _ => dls::step(&self.jac, rows, &e, lambda, &mut self.dq),
+                    _ => dls::damped_least_squares_step(&self.jac, rows, &e, lambda, &mut self.dq),
                 };
                 if !stepped {
                     break;
