@@ -454,6 +454,14 @@ struct BroadPhase {
     /// `cover_range`) that meet it. A part can touch an obstacle only where one of these
     /// balls does, so the exact test runs only on parts whose balls touched something.
     part_cover: Vec<u64>,
+    /// The pairs that move with the chain, in pair order: the two links and the squared sum
+    /// of their bounding radii (`pair_reach2`), for the per-check loop over pairs.
+    moving_pairs: Vec<(u32, u32, f64)>,
+    /// Per entry of `moving_pairs`: the pair's index.
+    moving_pair_index: Vec<u32>,
+    /// Per link: its shape as one box, when it is one (pose in the link frame, half extents),
+    /// for the self-collision test of its pairs against the other link's cover.
+    boxes: Vec<Option<(Isometry3<f64>, nalgebra::Vector3<f64>)>>,
     /// World centres of `parts` for the current configuration, filled lazily per link.
     parts_world: Vec<Point3<f64>>,
     /// Per link: the value of `epoch` when its `parts_world` were last filled.
@@ -499,6 +507,7 @@ impl BroadPhase {
         let mut cover_range = vec![0..0; n];
         let mut cover = Vec::new();
         let mut part_shape = Vec::new();
+        let mut boxes = vec![None; n];
         let inflate_f64 = |r: f64| {
             if r.is_finite() {
                 r * (1.0 + BOUND_SLACK_REL) + BOUND_SLACK_ABS
@@ -526,6 +535,11 @@ impl BroadPhase {
                 part_shape.push((s.shape.clone(), s.origin));
             }
             part_range[l] = start..parts.len();
+            if let [(shape, at)] = &part_shape[start..]
+                && let Some(cuboid) = shape.as_cuboid()
+            {
+                boxes[l] = Some((*at, p64(cuboid.half_extents).coords));
+            }
             let bs = s.shape.compute_local_bounding_sphere();
             let c = bs.center();
             let c = Point3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
@@ -540,13 +554,23 @@ impl BroadPhase {
             radius[l] = r;
             balls.push(Ball::new(if r.is_finite() { r as f32 } else { f32::MAX }));
         }
-        let pair_reach2 = pairs
+        let pair_reach2: Vec<f64> = pairs
             .iter()
             .map(|&(a, b)| {
                 let s = radius[a] + radius[b];
                 s * s
             })
             .collect();
+        let mut moves = vec![false; n];
+        for (&l, &m) in geometric.iter().zip(link_moves) {
+            moves[l] = m;
+        }
+        let (moving_pairs, moving_pair_index) = pairs
+            .iter()
+            .enumerate()
+            .filter(|&(_, &(a, b))| moves[a] || moves[b])
+            .map(|(i, &(a, b))| ((a as u32, b as u32, pair_reach2[i]), i as u32))
+            .unzip();
         let n_parts = parts.len();
         let part_inner = part_shape.iter().map(inner_ball).collect();
         let part_cover = (0..n)
@@ -567,6 +591,9 @@ impl BroadPhase {
             pair_reach2,
             part_range,
             parts,
+            moving_pairs,
+            moving_pair_index,
+            boxes,
             parts_world: vec![Point3::origin(); n_parts],
             parts_epoch: vec![u64::MAX; n],
             epoch: 0,
@@ -1399,9 +1426,19 @@ impl RobotValidity {
         if d2 > self.broad.pair_reach2[i] {
             return false;
         }
+        self.pair_blocked_within_reach(i)
+    }
+
+    /// [`RobotValidity::pair_blocked`] past its bounding-ball test (which the caller did).
+    #[inline(never)]
+    fn pair_blocked_within_reach(&mut self, i: usize) -> bool {
+        let (a, b) = self.pairs[i];
         if let Some(table) = &self.pair_tables[i]
             && table.certainly_clear(&self.model, &self.q_full)
         {
+            return false;
+        }
+        if self.cover_clears_box(a, b) {
             return false;
         }
         // Second level: every part sphere of `a` against every part sphere of `b`.
@@ -1453,6 +1490,38 @@ impl RobotValidity {
         bp.near_a = near_a;
         bp.near_b = near_b;
         close && links_touch(&self.model, &self.poses, a, b)
+    }
+
+    /// Whether one link of the pair `(a, b)` is a single box that no ball of the other link's
+    /// cover touches, which proves the pair apart: the cover contains its link. The Fetch's
+    /// fixed torso and its bellows are single boxes whose bounding balls (radius 0.29 m and
+    /// 0.23 m) hold the folded arm's links in most configurations, so the part spheres met
+    /// and parry's exact test ran there, and almost never found contact (none in 500,000
+    /// such tests of one set of plans). Tried on every single-part link and, where part
+    /// spheres meet, on the other link's nearby parts: more instructions than parry's test.
+    fn cover_clears_box(&self, a: usize, b: usize) -> bool {
+        let bp = &self.broad;
+        let (covered, boxed) = if bp.boxes[b].is_some() && !bp.cover_range[a].is_empty() {
+            (a, b)
+        } else if bp.boxes[a].is_some() && !bp.cover_range[b].is_empty() {
+            (b, a)
+        } else {
+            return false;
+        };
+        let Some((at, half)) = &bp.boxes[boxed] else {
+            return false;
+        };
+        // The covered link's frame in the box's frame.
+        let to_box = (self.poses[boxed] * at).inv_mul(&self.poses[covered]);
+        bp.cover[bp.cover_range[covered].clone()].iter().all(|(c, r)| {
+            let p = to_box * c;
+            let outside = nalgebra::Vector3::new(
+                (p.x.abs() - half.x).max(0.0),
+                (p.y.abs() - half.y).max(0.0),
+                (p.z.abs() - half.z).max(0.0),
+            );
+            outside.norm_squared() > r * r
+        })
     }
 
     /// Links and pairs that do not move with the chain, checked once per reference, base and
@@ -1524,10 +1593,18 @@ impl RobotValidity {
                 return true;
             }
         }
-        for i in 0..self.pairs.len() {
-            if self.pair_moves[i] && skip != Hint::Pair(i) && self.pair_blocked(i) {
-                self.broad.hint = Hint::Pair(i);
-                return true;
+        // The moving pairs' bounding balls in one tight loop (most are apart), the rest of
+        // the pair test only for those within reach: 17 % fewer instructions per Fetch check
+        // than calling the whole test for each of its 70 pairs.
+        for k in 0..self.broad.moving_pairs.len() {
+            let (a, b, reach2) = self.broad.moving_pairs[k];
+            let d2 = (self.broad.world_center[a as usize] - self.broad.world_center[b as usize]).norm_squared();
+            if d2 <= reach2 {
+                let i = self.broad.moving_pair_index[k] as usize;
+                if skip != Hint::Pair(i) && self.pair_blocked_within_reach(i) {
+                    self.broad.hint = Hint::Pair(i);
+                    return true;
+                }
             }
         }
         self.broad.hint_streak = 0;
