@@ -34,6 +34,7 @@
 mod builtin;
 mod chain;
 mod convert;
+pub mod distance_field;
 mod error;
 mod fk;
 mod ik;
@@ -41,6 +42,7 @@ mod jacobian;
 mod mesh;
 mod model;
 mod pair_table;
+mod per_link;
 mod resolve;
 mod self_collision;
 pub mod spheres;

@@ -376,6 +376,8 @@ pub(crate) struct ModelData {
     pub(crate) pair_tables: std::sync::Mutex<PairTables>,
     /// Per link: a conservative sphere cover of its collision shape, built on first use.
     pub(crate) sphere_covers: std::sync::OnceLock<Arc<Vec<Vec<crate::spheres::Sphere>>>>,
+    /// Per link: the distance field of a compound link's shape, built on first use.
+    pub(crate) distance_fields: std::sync::OnceLock<Arc<Vec<Option<crate::distance_field::DistanceField>>>>,
 }
 
 /// An immutable robot description: a tree of links connected by joints, with limits and
@@ -622,6 +624,25 @@ impl RobotModel {
     pub fn link_spheres(&self, link: usize) -> &[crate::spheres::Sphere] {
         let covers = self.0.sphere_covers.get_or_init(|| crate::spheres::covers(self));
         covers.get(link).map_or(&[], Vec::as_slice)
+    }
+
+    /// The distance field of link `link`'s collision shape, in the link frame, for links
+    /// with at least [`MIN_PARTS`](crate::distance_field::MIN_PARTS) collision elements
+    /// (`None` for the others). Built once per model on first use, for every such link at
+    /// once (a built-in robot's once per process); see [`crate::distance_field`].
+    ///
+    /// ```
+    /// use hearth_kinematics::RobotModel;
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// assert!(fetch.link_field(fetch.link_index("base_link").unwrap()).is_some()); // 15 boxes
+    /// assert!(fetch.link_field(fetch.link_index("wrist_roll_link").unwrap()).is_none()); // one cylinder
+    /// ```
+    pub fn link_field(&self, link: usize) -> Option<&crate::distance_field::DistanceField> {
+        let fields = self
+            .0
+            .distance_fields
+            .get_or_init(|| crate::distance_field::fields(self));
+        fields.get(link).and_then(Option::as_ref)
     }
 
     /// The clearance table of links `a` and `b` (see [`PairTable`](crate::PairTable)), built

@@ -13,7 +13,6 @@
 //!    of its points + that point's `h`. Every point of the part is within `h` of a kept grid
 //!    point, and that grid point lies in some ball shrunk by `h`, so the balls cover the part.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use nalgebra::Point3;
@@ -21,56 +20,12 @@ use parry3d::math::{Pose, Vector};
 use parry3d::shape::Shape;
 
 use crate::model::{LinkShape, RobotModel};
+use crate::per_link::{BuiltinCache, per_link};
 
-/// Covers of every link of `model`. The built-in robots' covers are computed once per process
-/// and shared by every model loaded from the same embedded text.
+/// Covers of every link of `model` (see [`crate::per_link`]).
 pub(crate) fn covers(model: &RobotModel) -> Arc<Vec<Vec<Sphere>>> {
-    // Links are independent: they are covered on every core at once (the Fetch's take about
-    // a second on one), each thread taking the next link not yet taken. A cover depends only
-    // on its link, so the result does not depend on the threads.
-    let compute = || {
-        let n = model.links().len();
-        let threads = std::thread::available_parallelism()
-            .map_or(1, |t| t.get())
-            .min(n.max(1));
-        let next = AtomicUsize::new(0);
-        let mut out = vec![Vec::new(); n];
-        std::thread::scope(|scope| {
-            let workers: Vec<_> = (0..threads)
-                .map(|_| {
-                    scope.spawn(|| {
-                        let mut done = Vec::new();
-                        loop {
-                            let l = next.fetch_add(1, Ordering::Relaxed);
-                            if l >= n {
-                                return done;
-                            }
-                            done.push((l, model.link_shape(l).map(cover).unwrap_or_default()));
-                        }
-                    })
-                })
-                .collect();
-            for worker in workers {
-                for (l, balls) in worker.join().expect("a cover thread panicked") {
-                    out[l] = balls;
-                }
-            }
-        });
-        Arc::new(out)
-    };
-    if !model.source_name().starts_with("builtin:") {
-        return compute();
-    }
-    type Covers = Arc<Vec<Vec<Sphere>>>;
-    static BUILTIN: Mutex<Vec<(String, u64, Covers)>> = Mutex::new(Vec::new());
-    let key = (model.source_name(), model.fingerprint());
-    let mut cache = BUILTIN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if let Some((_, _, c)) = cache.iter().find(|(n, f, _)| (n.as_str(), *f) == key) {
-        return c.clone();
-    }
-    let c = compute();
-    cache.push((key.0.to_owned(), key.1, c.clone()));
-    c
+    static BUILTIN: BuiltinCache<Vec<Sphere>> = Mutex::new(Vec::new());
+    per_link(model, &BUILTIN, cover)
 }
 
 /// Finest grid spacing (m) used to sample a part.

@@ -484,6 +484,7 @@ pub(crate) fn build(
         chains,
         fk: FkProgram { ops },
         sphere_covers: std::sync::OnceLock::new(),
+        distance_fields: std::sync::OnceLock::new(),
         pair_tables: std::sync::Mutex::default(),
     };
     Ok(RobotModel(Arc::new(data)))
