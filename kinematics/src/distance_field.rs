@@ -29,13 +29,23 @@ use crate::model::{LinkShape, RobotModel};
 use crate::per_link::{BuiltinCache, per_link};
 use crate::to_pose;
 
-/// Grid spacing (m). A ball is cleared when its distance bound beats its radius by the
-/// distance from its centre to the nearest grid point, at most `STEP * sqrt(3) / 2` (8.7 mm).
+/// Grid spacing (m), for links whose grid holds at most [`MAX_POINTS`] at it. A ball is
+/// cleared when its distance bound beats its radius by the distance from its centre to the
+/// nearest grid point, at most `step * sqrt(3) / 2` (8.7 mm).
 ///
 /// ```
 /// assert!(hearth_kinematics::distance_field::STEP <= 0.01);
 /// ```
 pub const STEP: f64 = 0.01;
+/// Most grid points in one field (2 bytes each): bigger links get a coarser grid.
+///
+/// ```
+/// use hearth_kinematics::{LinkShape, distance_field::{DistanceField, MAX_POINTS}};
+/// use parry3d::shape::SharedShape;
+/// let hall = LinkShape { shape: SharedShape::cuboid(5.0, 5.0, 1.0), origin: nalgebra::Isometry3::identity() };
+/// assert!(DistanceField::build(&hall).len() <= MAX_POINTS);
+/// ```
+pub const MAX_POINTS: usize = 1 << 21;
 /// How far (m) the grid reaches past the link's bounding box; beyond it, the distance to the
 /// box is the bound.
 pub const MARGIN: f64 = 0.06;
@@ -61,6 +71,10 @@ const F32_SLACK: f64 = 1e-5;
 pub struct DistanceField {
     /// Grid point (0, 0, 0) in the link frame.
     origin: Point3<f64>,
+    /// Grid spacing (m): [`STEP`], or coarser for a big link.
+    step: f64,
+    /// `1 / step`.
+    inv_step: f64,
     /// Grid points along x, y and z.
     dims: [usize; 3],
     /// Per grid point (x fastest): the distance bound in [`UNIT`]s.
@@ -89,13 +103,19 @@ impl DistanceField {
         let center = Point3::from((lo + hi) * 0.5);
         let half = (hi - lo) * 0.5;
         let origin = Point3::from(lo - Vector3::repeat(MARGIN));
-        let n = |e: f64| ((e + 2.0 * MARGIN) / STEP).ceil() as usize + 1;
-        let dims = [n(hi.x - lo.x), n(hi.y - lo.y), n(hi.z - lo.z)];
+        let span = hi - lo + Vector3::repeat(2.0 * MARGIN);
+        // Points along each axis at spacing `step`; the spacing grows until they fit.
+        let count = |e: f64, step: f64| (e / step).ceil() as usize + 1;
+        let mut step = STEP;
+        while span.iter().map(|&e| count(e, step)).product::<usize>() > MAX_POINTS {
+            step *= 1.25;
+        }
+        let dims = [count(span.x, step), count(span.y, step), count(span.z, step)];
         let mut dist = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
         for k in 0..dims[2] {
             for j in 0..dims[1] {
                 for i in 0..dims[0] {
-                    let g = origin + Vector3::new(i as f64, j as f64, k as f64) * STEP;
+                    let g = origin + Vector3::new(i as f64, j as f64, k as f64) * step;
                     let p = Vector::new(g.x as f32, g.y as f32, g.z as f32);
                     // `p` is `g` rounded to f32: the bound at `g` loses that offset too.
                     let off = (g - Point3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z))).norm();
@@ -106,6 +126,8 @@ impl DistanceField {
         }
         Self {
             origin,
+            step,
+            inv_step: 1.0 / step,
             dims,
             dist,
             aabb: (center, half),
@@ -158,14 +180,14 @@ impl DistanceField {
     #[inline]
     fn nearest(&self, p: &Point3<f64>) -> Option<(f64, f64)> {
         // Grid coordinates shifted by half a step: truncation then rounds to nearest.
-        let g = (p - self.origin) * (1.0 / STEP) + Vector3::repeat(0.5);
+        let g = (p - self.origin) * self.inv_step + Vector3::repeat(0.5);
         let inside = |v: f64, n: usize| v >= 0.0 && v < n as f64;
         if !(inside(g.x, self.dims[0]) && inside(g.y, self.dims[1]) && inside(g.z, self.dims[2])) {
             return None;
         }
         let (i, j, k) = (g.x as usize, g.y as usize, g.z as usize);
         let stored = f64::from(self.dist[(k * self.dims[1] + j) * self.dims[0] + i]) * UNIT;
-        let gap = (g - Vector3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5)) * STEP;
+        let gap = (g - Vector3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5)) * self.step;
         Some((stored, gap.norm_squared()))
     }
 
@@ -252,7 +274,7 @@ mod tests {
                     bound <= exact + 1e-6,
                     "link {l}: bound {bound} above distance {exact} at {p}"
                 );
-                let grid_point_reach = super::STEP * 3f64.sqrt() / 2.0;
+                let grid_point_reach = field.step * 3f64.sqrt() / 2.0;
                 if field.nearest(&p).is_some() {
                     assert!(
                         bound >= exact - 2.0 * grid_point_reach - 1e-3,
