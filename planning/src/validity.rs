@@ -384,6 +384,11 @@ pub struct RobotValidity {
     next_to: [[f64; 32]; 4],
     /// Scratch: the stretches of states not yet checked nor certified.
     stretches: std::collections::VecDeque<(usize, usize)>,
+    /// Scratch of [`StateValidator::tool_step`]: a full configuration, a pose buffer and the
+    /// tool's Jacobian, so that the escape's walks do not allocate.
+    tool_q: Vec<f64>,
+    tool_poses: Vec<Isometry3<f64>>,
+    tool_jacobian: nalgebra::Matrix6xX<f64>,
 }
 
 /// States a stretch must hold before a check along a motion finds the free region of its
@@ -750,6 +755,9 @@ impl RobotValidity {
             lanes_current: false,
             reach,
             stretches: std::collections::VecDeque::with_capacity(64),
+            tool_q: model.neutral_configuration(),
+            tool_poses: model.pose_buffer(),
+            tool_jacobian: nalgebra::Matrix6xX::zeros(chain.dof()),
             free: std::array::from_fn(|_| Vec::with_capacity(64)),
             next_to: [[0.0; 32]; 4],
             q_full: model.neutral_configuration(),
@@ -1893,14 +1901,13 @@ impl StateValidator for RobotValidity {
         if axis >= 6 || q.len() != dof || out.len() != dof || !length.is_finite() || !q.iter().all(|v| v.is_finite()) {
             return false;
         }
-        let mut full = self.q_full.clone();
-        self.chain.scatter(q, &mut full);
-        let mut poses = self.model.pose_buffer();
-        let mut jacobian = nalgebra::Matrix6xX::zeros(dof);
-        if self.model.fk_from(&self.base, &full, &mut poses).is_err()
+        let (full, poses, jacobian) = (&mut self.tool_q, &mut self.tool_poses, &mut self.tool_jacobian);
+        full.copy_from_slice(&self.q_full);
+        self.chain.scatter(q, full);
+        if self.model.fk_from(&self.base, full, poses).is_err()
             || self
                 .model
-                .jacobian(&poses, &self.chain, tip, &nalgebra::Vector3::zeros(), &mut jacobian)
+                .jacobian(poses, &self.chain, tip, &nalgebra::Vector3::zeros(), jacobian)
                 .is_err()
         {
             return false;
@@ -1909,7 +1916,7 @@ impl StateValidator for RobotValidity {
         local[axis % 3] = if axis < 3 { length } else { -length };
         let along = poses[tip].rotation * local;
         let twist = [along.x, along.y, along.z, 0.0, 0.0, 0.0];
-        if !hearth_kinematics::damped_least_squares_step(&jacobian, 6, &twist, TOOL_STEP_DAMPING, out) {
+        if !hearth_kinematics::damped_least_squares_step(jacobian, 6, &twist, TOOL_STEP_DAMPING, out) {
             return false;
         }
         for (o, q) in out.iter_mut().zip(q) {
