@@ -1568,19 +1568,27 @@ impl RobotValidity {
             || second.is_some_and(|(f, c)| self.field_clears_cover(f, c))
     }
 
-    /// Whether every ball of link `c`'s cover is clear of link `f`'s distance field.
+    /// Whether every ball of link `c`'s cover is clear of link `f`'s distance field (after
+    /// the check's `update_centers`).
     fn field_clears_cover(&self, f: usize, c: usize) -> bool {
         let Some(field) = self.model.link_field(f) else {
             return false;
         };
+        let bp = &self.broad;
+        // The link's bounding ball first, from its world centre (already known): one lookup
+        // settles the pairs that are far apart but within the field link's (large) bounding
+        // ball, without composing the two poses.
+        if field.clears_ball(
+            &self.poses[f].inverse_transform_point(&bp.world_center[c]),
+            bp.radius[c],
+        ) {
+            return true;
+        }
         let to_field = self.poses[f].inv_mul(&self.poses[c]);
         let (rot, at) = (to_field.rotation.to_rotation_matrix(), to_field.translation.vector);
-        let bp = &self.broad;
-        let clears = |p: &Point3<f64>, r: f64| field.clears_ball(&Point3::from(rot * p.coords + at), r);
-        // The link's bounding ball first: one lookup settles the pairs that are far apart
-        // but within the field link's (large) bounding ball.
-        clears(&bp.local_center[c], bp.radius[c])
-            || bp.cover[bp.cover_range[c].clone()].iter().all(|(p, r)| clears(p, *r))
+        bp.cover[bp.cover_range[c].clone()]
+            .iter()
+            .all(|(p, r)| field.clears_ball(&Point3::from(rot * p.coords + at), *r))
     }
 
     /// Links and pairs that do not move with the chain, checked once per reference, base and
@@ -1979,6 +1987,7 @@ mod tests {
         for _ in 0..2000 {
             chain.random_configuration(&mut rng, &mut q);
             assert!(v.update_poses(&q));
+            v.update_centers();
             for &i in &selected {
                 let (a, b) = v.pairs[i];
                 let touch = links_touch(&v.model, &v.poses, a, b);
