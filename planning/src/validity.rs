@@ -448,6 +448,9 @@ struct BroadPhase {
     /// Balls whose union covers each link (see `RobotModel::link_spheres`): centre in the
     /// link frame and inflated radius. Tested against the obstacles before exact tests.
     cover: Vec<(Point3<f64>, f64)>,
+    /// `cover` in `f32`, as structure-of-arrays (x, y, z, radius), for placing a link's balls
+    /// into a [`BallBatch`] in one vectorised pass ([`BallBatch::push_placed`]).
+    cover_local: [Vec<Real>; 4],
     /// Per part (same indices as `parts`): its shape and its pose in the link frame, for
     /// exact tests of single parts.
     part_shape: Vec<(SharedShape, Isometry3<f64>)>,
@@ -609,6 +612,12 @@ impl BroadPhase {
             .collect();
         Self {
             cover_range,
+            cover_local: [
+                cover.iter().map(|(c, _)| c.x as Real).collect(),
+                cover.iter().map(|(c, _)| c.y as Real).collect(),
+                cover.iter().map(|(c, _)| c.z as Real).collect(),
+                cover.iter().map(|&(_, r)| r as Real).collect(),
+            ],
             cover,
             part_shape,
             part_inner,
@@ -637,6 +646,23 @@ impl BroadPhase {
             hint_part: usize::MAX,
             hint_streak: 0,
         }
+    }
+
+    /// Appends link `l`'s cover balls, placed at `pose`, to `batch` (the caller checks that
+    /// they fit). The rotation and translation go to `f32` once; the balls are placed in one
+    /// vectorised pass, within ~1e-7 m of the `f64` placement rounded to `f32`, far inside
+    /// the covers' inflation.
+    fn push_cover(&mut self, l: usize, pose: &Isometry3<f64>) {
+        let range = self.cover_range[l].clone();
+        let m = pose.rotation.to_rotation_matrix();
+        let rotation: [[Real; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)] as Real));
+        let t = &pose.translation.vector;
+        let [x, y, z, r] = &self.cover_local;
+        self.batch.push_placed(
+            &rotation,
+            [t.x as Real, t.y as Real, t.z as Real],
+            [&x[range.clone()], &y[range.clone()], &z[range.clone()], &r[range]],
+        );
     }
 }
 
@@ -1139,10 +1165,7 @@ impl RobotValidity {
                 if b.batch.len() + range.len() > BallBatch::CAPACITY {
                     break;
                 }
-                let pose = &self.poses[l];
-                for k in range {
-                    b.batch.push(to_vector(&(pose * b.cover[k].0)), b.cover[k].1 as f32);
-                }
+                b.push_cover(l, &self.poses[l]);
                 end += 1;
             }
             if !self.obstacles.balls_clearance(&b.batch, look, &mut clearance) {
@@ -1389,12 +1412,8 @@ impl RobotValidity {
         let balls = if range.is_empty() || range.len() > BallBatch::CAPACITY || !b.radius[l].is_finite() {
             u64::MAX
         } else {
-            let pose = &self.poses[l];
             b.batch.clear();
-            for k in range {
-                let c = pose * b.cover[k].0;
-                b.batch.push(to_vector(&c), b.cover[k].1 as f32);
-            }
+            b.push_cover(l, &self.poses[l]);
             let touched = self.obstacles.balls_touching(&b.batch);
             if touched == 0 {
                 return false;

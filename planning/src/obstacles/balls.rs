@@ -106,6 +106,46 @@ impl BallBatch {
         true
     }
 
+    /// Appends balls given in a local frame (`local`: x, y, z and radius, one slice each, of
+    /// equal lengths), placed by the rigid transform `rotation` (row-major) and `translation`:
+    /// one pass over the slices, which the compiler vectorises. `false`, with nothing
+    /// appended, when they do not fit or the slices' lengths differ.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::BallBatch;
+    /// use parry3d::math::Vector;
+    ///
+    /// let mut balls = BallBatch::new();
+    /// let quarter_turn_z = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    /// let local = [&[1.0, 0.0][..], &[0.0, 2.0][..], &[0.0, 0.0][..], &[0.1, 0.2][..]];
+    /// assert!(balls.push_placed(&quarter_turn_z, [0.0, 0.0, 5.0], local));
+    /// assert_eq!(balls.ball(0), (Vector::new(0.0, 1.0, 5.0), 0.1));
+    /// assert_eq!(balls.ball(1), (Vector::new(-2.0, 0.0, 5.0), 0.2));
+    /// ```
+    pub fn push_placed(&mut self, rotation: &[[Real; 3]; 3], translation: [Real; 3], local: [&[Real]; 4]) -> bool {
+        let [xs, ys, zs, rs] = local;
+        let (at, n) = (self.len, xs.len());
+        if at + n > Self::CAPACITY || ys.len() != n || zs.len() != n || rs.len() != n {
+            return false;
+        }
+        let [r0, r1, r2] = rotation;
+        let [tx, ty, tz] = translation;
+        let (x, y, z) = (
+            &mut self.x[at..at + n],
+            &mut self.y[at..at + n],
+            &mut self.z[at..at + n],
+        );
+        for j in 0..n {
+            let (px, py, pz) = (xs[j], ys[j], zs[j]);
+            x[j] = r0[0] * px + r0[1] * py + r0[2] * pz + tx;
+            y[j] = r1[0] * px + r1[1] * py + r1[2] * pz + ty;
+            z[j] = r2[0] * px + r2[1] * py + r2[2] * pz + tz;
+        }
+        self.r[at..at + n].copy_from_slice(rs);
+        self.len += n;
+        true
+    }
+
     /// How many balls the batch holds.
     ///
     /// ```
