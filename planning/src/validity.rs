@@ -490,9 +490,6 @@ struct BroadPhase {
     near_soa: [Vec<f32>; 4],
     /// Per link: world centre of the bounding sphere for the current configuration.
     world_center: Vec<Point3<f64>>,
-    /// Whether `world_center` holds the current centres of the links that do not move with
-    /// the chain (their poses change only with a full forward kinematics pass).
-    fixed_centers_current: bool,
     /// The check that failed last, tried first.
     hint: Hint,
     /// With `Hint::Link`: the part of that link (index into `parts`) that touched an obstacle
@@ -641,7 +638,6 @@ impl BroadPhase {
             near_b: Vec::with_capacity(n_parts),
             near_soa: std::array::from_fn(|_| Vec::with_capacity(n_parts)),
             world_center: vec![Point3::origin(); n],
-            fixed_centers_current: false,
             hint: Hint::None,
             hint_part: usize::MAX,
             hint_streak: 0,
@@ -994,7 +990,12 @@ impl RobotValidity {
         }
         self.fixed_poses_current = self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok();
         self.lanes_current = false;
-        self.broad.fixed_centers_current = false;
+        // The only pass that moves the links that do not move with the chain: their centres
+        // here, the others' in every check (`update_centers`).
+        let b = &mut self.broad;
+        for &l in &self.geometric {
+            b.world_center[l] = self.poses[l] * b.local_center[l];
+        }
         self.fixed_poses_current
     }
 
@@ -1369,22 +1370,16 @@ impl RobotValidity {
         self.obstacles.ball_hits(to_vector(&c), r as f32).then_some(hit)
     }
 
-    /// World centres of the links' bounding spheres for the current poses: those of the
-    /// links that move with the chain, and the others' after a full forward kinematics pass
-    /// (the Fetch's base, wheels, casters and fixed torso parts: 10 of its 25 links).
+    /// World centres of the bounding spheres of the links that move with the chain, for the
+    /// current poses. The other links' centres (the Fetch's base, wheels, casters and fixed
+    /// torso parts: 10 of its 25 links) change only with a full forward kinematics pass,
+    /// which sets them ([`RobotValidity::update_poses`]).
     fn update_centers(&mut self) {
         let b = &mut self.broad;
         b.epoch = b.epoch.wrapping_add(1);
-        if b.fixed_centers_current {
-            for &i in &b.moving {
-                let l = self.geometric[i];
-                b.world_center[l] = self.poses[l] * b.local_center[l];
-            }
-        } else {
-            for &l in &self.geometric {
-                b.world_center[l] = self.poses[l] * b.local_center[l];
-            }
-            b.fixed_centers_current = true;
+        for &i in &b.moving {
+            let l = self.geometric[i];
+            b.world_center[l] = self.poses[l] * b.local_center[l];
         }
     }
 
