@@ -36,7 +36,7 @@ impl Axis {
 }
 
 /// How an op moves its child.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Motion {
     Fixed,
     /// Rotation about a frame axis; `multiplier` already carries the axis sign.
@@ -61,7 +61,7 @@ pub(crate) enum Motion {
 }
 
 /// One step of the program: `pose[child] = pose[parent] · origin · motion(q)`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct FkOp {
     pub(crate) parent: u32,
     pub(crate) child: u32,
@@ -311,6 +311,16 @@ impl FkProgram {
         Self::eval(subset.iter().map(|&i| &self.ops[i as usize]), q, poses);
     }
 
+    /// Runs `subset`'s ops, its held copies when it has them.
+    #[inline]
+    fn run_fk_subset(&self, subset: &FkSubset, q: &[f64], poses: &mut [Isometry3<f64>]) {
+        if subset.held.is_empty() {
+            self.run_subset(&subset.ops, q, poses);
+        } else {
+            Self::eval(subset.held.iter(), q, poses);
+        }
+    }
+
     /// Evaluates `ops` in order. Serial chains dominate: the last pose stays in registers
     /// instead of being reloaded when the next op hangs from it.
     #[inline(always)]
@@ -333,10 +343,20 @@ impl FkProgram {
 
     /// [`FkProgram::run_subset`] for four configurations at once, bit for bit the same poses.
     #[inline]
-    pub(crate) fn run_subset4(&self, subset: &[u32], q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
+    fn run_subset4(&self, subset: &FkSubset, q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
+        if subset.held.is_empty() {
+            Self::eval4(subset.ops.iter().map(|&i| &self.ops[i as usize]), q, poses);
+        } else {
+            Self::eval4(subset.held.iter(), q, poses);
+        }
+    }
+
+    /// Evaluates `ops` in order for four configurations at once.
+    #[inline(always)]
+    fn eval4<'a>(ops: impl Iterator<Item = &'a FkOp>, q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
         let mut prev_child = u32::MAX;
         let mut prev = PoseLanes::<f64x4>::splat(&Isometry3::identity());
-        for op in subset.iter().map(|&i| &self.ops[i as usize]) {
+        for op in ops {
             let p = op.parent as usize;
             let parent = if op.parent == prev_child {
                 prev
@@ -365,12 +385,15 @@ impl FkProgram {
 /// let below = fetch.fk_subset(|l| fetch.joints_to(l).iter().any(|&j| arm.joints().contains(&j)));
 /// assert!(below.contains(wrist) && below.len() < fetch.links().len());
 /// ```
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FkSubset {
     /// Op indices in evaluation order (op `i` computes link `i + 1`).
     ops: Vec<u32>,
     /// Links of the model it was made for.
     links: usize,
+    /// When not empty, evaluated instead of `ops`: copies of them in which the joints held at
+    /// a configuration are fixed joints ([`RobotModel::fk_subset_holding`]).
+    held: Vec<FkOp>,
 }
 
 impl FkSubset {
@@ -431,7 +454,57 @@ impl RobotModel {
                 .map(|l| (l - 1) as u32)
                 .collect(),
             links: self.0.links.len(),
+            held: Vec::new(),
         }
+    }
+
+    /// Holds every joint of `subset` whose configuration variable `varies` rejects at its value
+    /// in `q`: such a joint's transform is composed once, here, instead of in every
+    /// [`RobotModel::fk_update`]. Mimic joints read their leader's variable. Updates with the
+    /// held subset give, bit for bit, the poses the plain subset gives for any configuration
+    /// that agrees with `q` on the held variables, and cost less when the subset has joints
+    /// that never move (a mobile manipulator's head and fingers while its arm is planned).
+    /// Holding again replaces what was held; the buffers are reused, so it does not allocate
+    /// after the first time.
+    ///
+    /// # Errors
+    /// `q` of the wrong length or with a value that is not finite, or a subset made for another
+    /// model; the subset is then plain again (it holds nothing).
+    ///
+    /// ```
+    /// use hearth_kinematics::{Chain, RobotModel};
+    /// let fetch = RobotModel::builtin("fetch").unwrap();
+    /// let arm = Chain::named(&fetch, "arm").unwrap();
+    /// let moving = fetch.fk_subset(|l| fetch.joints_to(l).iter().any(|&j| arm.joints().contains(&j)));
+    /// let mut q = fetch.neutral_configuration();
+    /// let mut held = moving.clone();
+    /// fetch.fk_subset_hold(&mut held, &q, |v| arm.variables().contains(&v)).unwrap();
+    /// let (mut plain, mut fast) = (fetch.pose_buffer(), fetch.pose_buffer());
+    /// fetch.fk(&q, &mut plain).unwrap();
+    /// fast.copy_from_slice(&plain);
+    /// arm.scatter(&[0.3, -0.5, 0.2, 1.0, 0.1, 0.4, -0.2], &mut q);
+    /// fetch.fk_update(&moving, &q, &mut plain).unwrap();
+    /// fetch.fk_update(&held, &q, &mut fast).unwrap();
+    /// assert_eq!(plain, fast);
+    /// assert!(fetch.fk_subset_hold(&mut held, &[0.0; 2], |_| true).is_err());
+    /// ```
+    pub fn fk_subset_hold(&self, subset: &mut FkSubset, q: &[f64], varies: impl Fn(usize) -> bool) -> Result<()> {
+        subset.held.clear();
+        self.check_configuration(q)?;
+        self.check_link_counts([("link subset's model", subset.links)])?;
+        let ops = &self.0.fk.ops;
+        subset.held.extend(subset.ops.iter().map(|&i| {
+            let op = ops[i as usize];
+            match op.var() {
+                Some(v) if !varies(v) => FkOp {
+                    origin: op.local(q),
+                    motion: Motion::Fixed,
+                    ..op
+                },
+                _ => op,
+            }
+        }));
+        Ok(())
     }
 
     /// Recomputes the poses of `subset`'s links for configuration `q`, keeping every other
@@ -455,7 +528,7 @@ impl RobotModel {
     pub fn fk_update(&self, subset: &FkSubset, q: &[f64], poses: &mut [Isometry3<f64>]) -> Result<()> {
         self.check_configuration(q)?;
         self.check_link_counts([("pose buffer", poses.len()), ("link subset's model", subset.links)])?;
-        self.0.fk.run_subset(&subset.ops, q, poses);
+        self.0.fk.run_fk_subset(subset, q, poses);
         Ok(())
     }
 
@@ -489,7 +562,7 @@ impl RobotModel {
                 .map(|p| ("pose buffer", p.len()))
                 .chain([("link subset's model", subset.links)]),
         )?;
-        self.0.fk.run_subset4(&subset.ops, q, poses);
+        self.0.fk.run_subset4(subset, q, poses);
         Ok(())
     }
 

@@ -320,3 +320,52 @@ fn four_lanes_equal_one_at_a_time() {
         assert!(model.fk_update4(&subsets[0], [&ok; 4], &mut short).is_err());
     }
 }
+
+/// A subset that holds the variables outside a set gives, bit for bit, the poses of the plain
+/// subset for every configuration that agrees with the held values, one lane and four lanes at
+/// a time, on every built-in robot; holding again at another configuration follows it, and a
+/// failed hold leaves the subset plain.
+#[test]
+fn held_subsets_equal_plain_ones() {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(23);
+    for robot in BUILTIN_ROBOTS {
+        let (name, model) = (robot.name, RobotModel::builtin(robot.name).unwrap());
+        let plain = model.fk_subset(|_| true);
+        // Every other variable moves; the rest are held.
+        let varies = |v: usize| v.is_multiple_of(2);
+        let mut held = plain.clone();
+        for round in 0..20 {
+            let mut reference = vec![0.0; model.dof()];
+            model.random_configuration(&mut rng, &mut reference);
+            model.fk_subset_hold(&mut held, &reference, varies).unwrap();
+            let qs: Vec<Vec<f64>> = (0..4)
+                .map(|_| {
+                    let mut q = vec![0.0; model.dof()];
+                    model.random_configuration(&mut rng, &mut q);
+                    for (v, x) in q.iter_mut().enumerate() {
+                        if !varies(v) {
+                            *x = reference[v];
+                        }
+                    }
+                    q
+                })
+                .collect();
+            let lane_q: [&[f64]; 4] = std::array::from_fn(|k| qs[k].as_slice());
+            let mut base = model.pose_buffer();
+            model.fk(&reference, &mut base).unwrap();
+            let mut four: [Vec<Isometry3<f64>>; 4] = std::array::from_fn(|_| base.clone());
+            model.fk_update4(&held, lane_q, &mut four).unwrap();
+            for k in 0..4 {
+                let (mut a, mut b) = (base.clone(), base.clone());
+                model.fk_update(&plain, lane_q[k], &mut a).unwrap();
+                model.fk_update(&held, lane_q[k], &mut b).unwrap();
+                assert_eq!(a, b, "{name}, round {round}, one lane {k}");
+                assert_eq!(a, four[k], "{name}, round {round}, four lanes, lane {k}");
+            }
+        }
+        assert_ne!(held, plain, "{name}: something is held");
+        let bad = vec![f64::NAN; model.dof()];
+        assert!(model.fk_subset_hold(&mut held, &bad, varies).is_err());
+        assert_eq!(held, plain, "{name}: a failed hold leaves the subset plain");
+    }
+}

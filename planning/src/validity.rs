@@ -990,6 +990,18 @@ impl RobotValidity {
         }
         self.fixed_poses_current = self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok();
         self.lanes_current = false;
+        // The joints the chain does not move (the Fetch's head, fingers and bellows) are held
+        // at this pass's values in the per-check kinematics: composed once, not per check.
+        let vars = self.chain.variables();
+        for subset in std::iter::once(&mut self.moving_fk).chain(&mut self.ancestry_fk) {
+            if self
+                .model
+                .fk_subset_hold(subset, &self.q_full, |v| vars.contains(&v))
+                .is_err()
+            {
+                self.fixed_poses_current = false;
+            }
+        }
         // The only pass that moves the links that do not move with the chain: their centres
         // here, the others' in every check (`update_centers`).
         let b = &mut self.broad;
