@@ -341,9 +341,9 @@ impl FkProgram {
         }
     }
 
-    /// [`FkProgram::run_subset`] for four configurations at once, bit for bit the same poses.
+    /// [`FkProgram::run_fk_subset`] for four configurations at once, bit for bit the same poses.
     #[inline]
-    fn run_subset4(&self, subset: &FkSubset, q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
+    fn run_fk_subset4(&self, subset: &FkSubset, q: [&[f64]; 4], poses: &mut [Vec<Isometry3<f64>>; 4]) {
         if subset.held.is_empty() {
             Self::eval4(subset.ops.iter().map(|&i| &self.ops[i as usize]), q, poses);
         } else {
@@ -392,7 +392,7 @@ pub struct FkSubset {
     /// Links of the model it was made for.
     links: usize,
     /// When not empty, evaluated instead of `ops`: copies of them in which the joints held at
-    /// a configuration are fixed joints ([`RobotModel::fk_subset_holding`]).
+    /// a configuration are fixed joints ([`RobotModel::fk_subset_hold`]).
     held: Vec<FkOp>,
 }
 
@@ -562,7 +562,7 @@ impl RobotModel {
                 .map(|p| ("pose buffer", p.len()))
                 .chain([("link subset's model", subset.links)]),
         )?;
-        self.0.fk.run_subset4(subset, q, poses);
+        self.0.fk.run_fk_subset4(subset, q, poses);
         Ok(())
     }
 

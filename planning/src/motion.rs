@@ -167,7 +167,7 @@ impl<S: Space> MotionValidator<S> {
     /// then [`BATCH`] at a time, so an implementation can compute them together. (A colliding
     /// edge fails at its midpoint most often; computing states after it together would be
     /// wasted work then: alone, the midpoint takes 4.7 % off the Fetch planner's instructions
-    /// on its bookshelf plans.)
+    /// on median bookshelf_thin and table_pick plans.)
     ///
     /// ```
     /// use hearth_planning::motion::MotionValidator;
