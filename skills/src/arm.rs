@@ -75,6 +75,12 @@ pub struct ArmSettings {
     /// spread (`None`: one per 0.2 rad). Ruckig's waypoint solver takes 0.2–1.1 s for 30–80
     /// waypoints; fewer plan faster but follow the smoothed motion less closely.
     pub jerk_waypoints: Option<usize>,
+    /// Sweeps of Ruckig's local search over the pass-through states of those waypoints
+    /// ([`Trajectory::jerk_limited_with`]). Each sweep costs about as much as the next (about
+    /// 0.3 s for a Fetch motion of 69 waypoints); 0 takes milliseconds but gives
+    /// a motion several times slower. See `docs/benchmarks.md`, "Jerk-limited motions through
+    /// waypoints".
+    pub jerk_refinement_sweeps: usize,
 }
 
 impl ArmSettings {
@@ -104,6 +110,7 @@ impl ArmSettings {
             tolerance: 0.05,
             tool_reach: 0.036,
             jerk_waypoints: None,
+            jerk_refinement_sweeps: Trajectory::DEFAULT_REFINEMENT_SWEEPS,
         }
     }
 }
@@ -833,7 +840,12 @@ impl Arm {
         if let Some(max) = self.settings.jerk_waypoints {
             thin_waypoints(&mut waypoints.states, max);
         }
-        let (trajectory, jerk_limited) = match Trajectory::jerk_limited(&self.space, &waypoints, &self.limits) {
+        let (trajectory, jerk_limited) = match Trajectory::jerk_limited_with(
+            &self.space,
+            &waypoints,
+            &self.limits,
+            self.settings.jerk_refinement_sweeps,
+        ) {
             Ok(j)
                 if j.check(&self.space, &mut validity, self.settings.resolution / 10.0)
                     .is_ok() =>

@@ -39,8 +39,9 @@ fn input(limits: &Limits, bounds: Option<(&[f64], &[f64])>) -> InputParameter<0>
     input
 }
 
-fn run(input: &InputParameter<0>, n: usize) -> Result<Generated, TrajectoryError> {
+fn run(input: &InputParameter<0>, n: usize, sweeps: usize) -> Result<Generated, TrajectoryError> {
     let mut otg = Ruckig::<0, ThrowErrorHandler>::new(Some(n), 0.001);
+    otg.waypoint_refinement_sweeps = sweeps;
     let mut trajectory = Generated::new(Some(n));
     match otg.calculate(input, &mut trajectory) {
         Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => Ok(trajectory),
@@ -73,12 +74,13 @@ pub(crate) fn between(
         input.target_velocity[i] = v1[i];
         input.target_acceleration[i] = 0.0;
     }
-    run(&input, n)
+    run(&input, n, 0)
 }
 
 /// A motion from rest at `waypoints[0]` to rest at the last waypoint that passes through the
-/// ones between without stopping.
-pub(crate) fn through(waypoints: &[Vec<f64>], limits: &Limits) -> Result<Generated, TrajectoryError> {
+/// ones between without stopping, its pass-through states refined by up to `sweeps` sweeps of
+/// the waypoint solver's local search.
+pub(crate) fn through(waypoints: &[Vec<f64>], limits: &Limits, sweeps: usize) -> Result<Generated, TrajectoryError> {
     let n = limits.dim();
     let (Some(first), Some(last)) = (waypoints.first(), waypoints.last()) else {
         return Err(TrajectoryError::EmptyPath);
@@ -100,7 +102,7 @@ pub(crate) fn through(waypoints: &[Vec<f64>], limits: &Limits) -> Result<Generat
             })
             .collect();
     }
-    run(&input, n)
+    run(&input, n, sweeps)
 }
 
 /// Position and velocity of a ruckig trajectory at time `t` (clamped to its duration),

@@ -414,9 +414,47 @@ impl Trajectory {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn jerk_limited<S: Space>(space: &S, path: &Path, limits: &Limits) -> Result<Self, TrajectoryError> {
+        Self::jerk_limited_with(space, path, limits, Self::DEFAULT_REFINEMENT_SWEEPS)
+    }
+
+    /// Sweeps of the waypoint solver's local search in [`Trajectory::jerk_limited`]: the
+    /// `rsruckig` default.
+    pub const DEFAULT_REFINEMENT_SWEEPS: usize = 4;
+
+    /// [`Trajectory::jerk_limited`] with up to `refinement_sweeps` sweeps of the waypoint
+    /// solver's local search. The solver first picks a velocity and acceleration for each
+    /// waypoint by a rule of thumb, then each sweep tries changes to them, one full
+    /// state-to-state solve per try, and keeps those that shorten the motion. Its cost grows
+    /// with the sweeps, the waypoints and the joints; 0 keeps the first choice: the same
+    /// limits and waypoints, a slower motion, computed much sooner (see `docs/benchmarks.md`,
+    /// "Jerk-limited motions through waypoints").
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![20.0; 2])?;
+    /// let path = Path { states: vec![vec![0.1, 0.1], vec![0.5, 0.6], vec![0.9, 0.2], vec![0.4, 0.8]] };
+    /// let quick = Trajectory::jerk_limited_with(&space, &path, &limits, 0)?;
+    /// let refined = Trajectory::jerk_limited(&space, &path, &limits)?;
+    /// // The refinement only keeps changes that shorten the motion.
+    /// assert!(refined.duration() <= quick.duration());
+    /// let mut q = [0.0; 2];
+    /// quick.sample(quick.duration(), &mut q, None);
+    /// assert!((q[0] - 0.4).abs() < 1e-9 && (q[1] - 0.8).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn jerk_limited_with<S: Space>(
+        space: &S,
+        path: &Path,
+        limits: &Limits,
+        refinement_sweeps: usize,
+    ) -> Result<Self, TrajectoryError> {
         check_dim(limits, space.dim())?;
         let states = unwrapped(space, path)?;
-        let g = generator::through(&states, limits)?;
+        let g = generator::through(&states, limits, refinement_sweeps)?;
         Ok(Self::from_pieces(space.dim(), vec![Piece::Generated(Box::new(g))]))
     }
 
