@@ -419,7 +419,11 @@ impl Trajectory {
 
     /// Sweeps of the waypoint solver's local search in [`Trajectory::jerk_limited`]: the
     /// `rsruckig` default.
-    pub const DEFAULT_REFINEMENT_SWEEPS: usize = 4;
+    ///
+    /// ```
+    /// assert_eq!(hearth_planning::trajectory::Trajectory::DEFAULT_REFINEMENT_SWEEPS, 4);
+    /// ```
+    pub const DEFAULT_REFINEMENT_SWEEPS: usize = rsruckig::calculator_waypoints::DEFAULT_REFINEMENT_SWEEPS;
 
     /// [`Trajectory::jerk_limited`] with up to `refinement_sweeps` sweeps of the waypoint
     /// solver's local search. The solver first picks a velocity and acceleration for each
@@ -439,8 +443,8 @@ impl Trajectory {
     /// let path = Path { states: vec![vec![0.1, 0.1], vec![0.5, 0.6], vec![0.9, 0.2], vec![0.4, 0.8]] };
     /// let quick = Trajectory::jerk_limited_with(&space, &path, &limits, 0)?;
     /// let refined = Trajectory::jerk_limited(&space, &path, &limits)?;
-    /// // The refinement only keeps changes that shorten the motion.
-    /// assert!(refined.duration() <= quick.duration());
+    /// // The refinement keeps only the changes that shorten the motion.
+    /// assert!(refined.duration() < quick.duration());
     /// let mut q = [0.0; 2];
     /// quick.sample(quick.duration(), &mut q, None);
     /// assert!((q[0] - 0.4).abs() < 1e-9 && (q[1] - 0.8).abs() < 1e-9);
