@@ -1,6 +1,8 @@
 //! BiRRT, RRT and LazyPRM on a fixed subset of MotionBenchMaker problems (the Panda
 //! table_pick problems in `planning/tests/data`, fingers at 0.04 m), and the smoothing
-//! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths.
+//! pipeline (repair at the fine resolution + random + parabolic shortcutting) on their paths,
+//! then the two jerk-limited passes over the smoothed motions (`jerk/…`: the moving average,
+//! built and sampled at 1 ms, and Ruckig's waypoint solver through states 0.2 rad apart).
 //! Each plan uses the same seed, so every iteration plans the same path. `nn/…` times one
 //! nearest-neighbour query (and one query for the 10 nearest) among 20,000 random Panda
 //! configurations, with k-d trees (the Panda's bounded joints) and with k-d trees
@@ -16,7 +18,7 @@ use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSet
 use hearth_planning::problem::ProblemSet;
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
-use hearth_planning::trajectory::Limits;
+use hearth_planning::trajectory::{Limits, Trajectory};
 use hearth_planning::{
     BiRrt, Budget, Goal, LazyPrm, LazyPrmSettings, MotionValidator, PlanRequest, Planner, RobotValidity, Rrt,
 };
@@ -128,6 +130,52 @@ fn planners(c: &mut Criterion) {
             })
         });
     }
+    g.finish();
+
+    // Jerk-limited passes over the smoothed motions.
+    let smoothed: Vec<Trajectory> = paths
+        .iter()
+        .filter_map(|(i, p)| {
+            let mut motion = MotionValidator::new(f.space.clone(), RESOLUTION);
+            let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(2);
+            let v = &mut f.validity[*i];
+            smooth(
+                Smoothing::Parabolic,
+                &mut motion,
+                v,
+                p,
+                &f.limits,
+                &settings,
+                Duration::from_secs(1),
+                &mut rng,
+            )
+            .ok()
+            .map(|s| s.trajectory)
+        })
+        .collect();
+    let mut g = c.benchmark_group("jerk/panda_table_pick");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("average", |b| {
+        let mut q = vec![0.0; 7];
+        b.iter(|| {
+            for t in &smoothed {
+                let j = t.with_jerk_limits(&f.limits).unwrap();
+                let steps = (j.duration() / 1e-3) as usize;
+                for k in 0..=steps {
+                    j.sample(k as f64 * 1e-3, &mut q, None);
+                }
+                black_box(&q);
+            }
+        })
+    });
+    g.bench_function("ruckig_waypoints", |b| {
+        b.iter(|| {
+            for t in &smoothed {
+                let path = t.to_path(&f.space, 0.2);
+                black_box(Trajectory::jerk_limited(&f.space, &path, &f.limits).ok());
+            }
+        })
+    });
     g.finish();
 }
 

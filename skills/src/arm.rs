@@ -3,10 +3,10 @@
 //! A planned motion goes: collision-aware IK for the goal (several distinct solutions) →
 //! BiRRT in the joint space of the arm chain, checked against the live world (what the base
 //! stands on ignored, a held object attached) → random, then acceleration-bounded (parabolic)
-//! shortcutting → a jerk-limited (Ruckig) trajectory through the smoothed path, kept only if it
-//! is collision-free at a fine resolution → execution as position targets per control step
-//! ([`Execution::Physics`], with unexpected contacts reported as [`SkillError::Collision`]) or
-//! by setting the joints along it ([`Execution::Kinematic`]).
+//! shortcutting → a jerk-limited trajectory (by default the smoothed motion's moving average;
+//! see [`JerkPass`]), kept only if it is collision-free at a fine resolution → execution as
+//! position targets per control step ([`Execution::Physics`], with unexpected contacts reported
+//! as [`SkillError::Collision`]) or by setting the joints along it ([`Execution::Kinematic`]).
 //!
 //! Straight-line moves of the end effector ([`Arm::move_linear`]) are solved as small IK steps
 //! from the current configuration and executed at a fixed Cartesian speed until the distance is
@@ -32,6 +32,43 @@ use rand::{Rng, RngExt};
 
 use crate::error::{SkillError, SkillResult};
 use crate::execution::Execution;
+
+/// How [`Arm::plan`] turns the smoothed (acceleration-bounded) motion into the jerk-limited
+/// one it executes. Either way the result is kept only if it is collision-free at a tenth of
+/// the planning resolution; otherwise the smoothed motion is executed
+/// ([`MotionReport::jerk_limited`] tells which).
+///
+/// On the MotionBenchMaker bookshelf motions (`hearth bench plan --jerk`; `docs/benchmarks.md`,
+/// "Jerk-limited motions"), the moving average took 0.07 ms per Fetch motion, lasted 1 %
+/// longer than the smoothed motion and passed the check for 134 of 139; Ruckig's waypoint
+/// pass took about a second and passed for fewer than half.
+///
+/// ```
+/// use hearth_skills::arm::{ArmSettings, JerkPass};
+/// assert_eq!(ArmSettings::fetch().jerk, JerkPass::Average);
+/// let ruckig = ArmSettings { jerk: JerkPass::Waypoints { max: Some(16), sweeps: 1 }, ..ArmSettings::fetch() };
+/// assert_ne!(ruckig, ArmSettings::fetch());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JerkPass {
+    /// The smoothed motion's moving average ([`Trajectory::with_jerk_limits`]): microseconds,
+    /// a window of `w = 2 a / j` longer (0.06 s for the Fetch at the default velocity scale),
+    /// within `a w² / 24` of the checked motion (2 × 10⁻⁴ rad).
+    Average,
+    /// Ruckig's waypoint solver through states of the smoothed motion every 0.2 rad
+    /// ([`Trajectory::jerk_limited_with`]): at most `max` of them, evenly spread (`None`: all),
+    /// refined by `sweeps` sweeps of its local search. Each sweep costs about as much as the
+    /// last (about 0.3 s for a Fetch motion of 69 waypoints); 0 takes milliseconds but gives a
+    /// motion several times slower. It may cut corners between the waypoints.
+    Waypoints {
+        /// Most waypoints.
+        max: Option<usize>,
+        /// Sweeps of the local search ([`Trajectory::DEFAULT_REFINEMENT_SWEEPS`] by default).
+        sweeps: usize,
+    },
+    /// None: the smoothed motion as it is.
+    Off,
+}
 
 /// Settings of an [`Arm`].
 ///
@@ -71,16 +108,8 @@ pub struct ArmSettings {
     /// Distance from the tip link's origin to the fingertips along its approach axis (+x),
     /// metres: where pushes touch.
     pub tool_reach: f64,
-    /// Most waypoints handed to the jerk-limited (Ruckig) pass over a smoothed motion, evenly
-    /// spread (`None`: one per 0.2 rad). Ruckig's waypoint solver takes 0.2–1.1 s for 30–80
-    /// waypoints; fewer plan faster but follow the smoothed motion less closely.
-    pub jerk_waypoints: Option<usize>,
-    /// Sweeps of Ruckig's local search over the pass-through states of those waypoints
-    /// ([`Trajectory::jerk_limited_with`]). Each sweep costs about as much as the next (about
-    /// 0.3 s for a Fetch motion of 69 waypoints); 0 takes milliseconds but gives
-    /// a motion several times slower. See `docs/benchmarks.md`, "Jerk-limited motions through
-    /// waypoints".
-    pub jerk_refinement_sweeps: usize,
+    /// How a smoothed motion is made jerk-limited before execution.
+    pub jerk: JerkPass,
 }
 
 impl ArmSettings {
@@ -109,8 +138,7 @@ impl ArmSettings {
             ik_attempts: 40,
             tolerance: 0.05,
             tool_reach: 0.036,
-            jerk_waypoints: None,
-            jerk_refinement_sweeps: Trajectory::DEFAULT_REFINEMENT_SWEEPS,
+            jerk: JerkPass::Average,
         }
     }
 }
@@ -199,8 +227,9 @@ pub struct MotionReport {
     pub duration: f64,
     /// Waypoints of the planner's path.
     pub waypoints: usize,
-    /// Whether the jerk-limited (Ruckig) trajectory was used (else the acceleration-bounded
-    /// one, when the jerk-limited one cut a corner into an obstacle).
+    /// Whether the jerk-limited trajectory ([`ArmSettings::jerk`]) was used (else the
+    /// acceleration-bounded one: with [`JerkPass::Off`], or when the jerk-limited one was not
+    /// collision-free).
     pub jerk_limited: bool,
     /// Whether the motion was executed (false for a dry run).
     pub executed: bool,
@@ -834,19 +863,25 @@ impl Arm {
             rng,
         )?;
         let goal = smoothed.path.states.last().cloned().unwrap_or_else(|| from.clone());
-        // Jerk-limited execution through waypoints of the smoothed motion; it may cut corners,
-        // so it is kept only if it stays collision-free.
-        let mut waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
-        if let Some(max) = self.settings.jerk_waypoints {
-            thin_waypoints(&mut waypoints.states, max);
-        }
-        let (trajectory, jerk_limited) = match Trajectory::jerk_limited_with(
-            &self.space,
-            &waypoints,
-            &self.limits,
-            self.settings.jerk_refinement_sweeps,
-        ) {
-            Ok(j)
+        // The jerk-limited motion, kept only if it stays collision-free.
+        let jerk = match self.settings.jerk {
+            JerkPass::Average => Some(smoothed.trajectory.with_jerk_limits(&self.limits)),
+            JerkPass::Waypoints { max, sweeps } => {
+                let mut waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+                if let Some(max) = max {
+                    thin_waypoints(&mut waypoints.states, max);
+                }
+                Some(Trajectory::jerk_limited_with(
+                    &self.space,
+                    &waypoints,
+                    &self.limits,
+                    sweeps,
+                ))
+            }
+            JerkPass::Off => None,
+        };
+        let (trajectory, jerk_limited) = match jerk {
+            Some(Ok(j))
                 if j.check(&self.space, &mut validity, self.settings.resolution / 10.0)
                     .is_ok() =>
             {

@@ -10,7 +10,7 @@
 //! pure pursuit with replanning when blocked.
 //!
 //! Arm skills build on [`Arm`] ([`arm`]): collision-aware IK goals, BiRRT against the live
-//! world, parabolic shortcutting, jerk-limited (Ruckig) execution, straight-line and
+//! world, parabolic shortcutting, jerk-limited execution, straight-line and
 //! pose-following moves with a force limit. On top of it: [`push::push_at_pixel`] (ReLMoGen's
 //! push primitive), [`grasp::grasp`] and [`grasp::release`], [`place::place`], and
 //! [`articulated::open`] / [`articulated::close`] for drawers and doors.
@@ -42,7 +42,7 @@ pub mod push;
 pub mod relmogen;
 pub mod story;
 
-pub use arm::{Arm, ArmSettings, ArmTarget};
+pub use arm::{Arm, ArmSettings, ArmTarget, JerkPass};
 pub use articulated::{ArticulatedSettings, close, open};
 pub use error::{SkillError, SkillResult};
 pub use execution::Execution;

@@ -5,7 +5,7 @@ use hearth_sim::assets::{Asset, Category};
 use hearth_sim::kinematics::RobotModel;
 use hearth_sim::scene::{SceneFile, SceneObject};
 use hearth_sim::world::{JointCommand, ModelHandle, SpawnOptions, World, WorldConfig};
-use hearth_skills::arm::{Arm, ArmSettings, ArmTarget, LinearMove};
+use hearth_skills::arm::{Arm, ArmSettings, ArmTarget, JerkPass, LinearMove};
 use hearth_skills::planning::StateValidator;
 use hearth_skills::{Execution, SkillError};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -81,6 +81,44 @@ fn dry_run_is_deterministic_and_leaves_the_world_alone() {
     assert_eq!(a.report.duration, b.report.duration);
     assert!(!a.report.executed);
     assert_eq!(world.state_hash(), hash);
+}
+
+/// Every jerk pass ends where the smoothed motion does; the default moving average is used
+/// over an open table (it stays within a millimetre of the checked motion) and lasts only its
+/// window longer than the smoothed motion; `Off` keeps the smoothed motion itself.
+#[test]
+fn each_jerk_pass_plans_the_same_goal() {
+    let (world, robot, top) = table_scene();
+    let target = ArmTarget::Position(Point3::new(TABLE_X - 0.35, 0.15, top + 0.2));
+    let plan = |jerk: JerkPass| {
+        let arm = Arm::new(
+            &world,
+            robot,
+            ArmSettings {
+                jerk,
+                ..ArmSettings::fetch()
+            },
+        )
+        .unwrap();
+        arm.plan(&world, &target, &[], &mut rng(9)).unwrap()
+    };
+    let off = plan(JerkPass::Off);
+    let average = plan(JerkPass::Average);
+    let ruckig = plan(JerkPass::Waypoints {
+        max: Some(8),
+        sweeps: 0,
+    });
+    assert!(!off.report.jerk_limited);
+    assert!(average.report.jerk_limited, "{:?}", average.report);
+    // The Fetch's window: 2 a / j for every joint, its acceleration scaled by 0.6: 0.06 s.
+    let window = average.report.duration - off.report.duration;
+    assert!((window - 0.06).abs() < 1e-9, "{window}");
+    for p in [&average, &ruckig] {
+        assert_eq!(p.goal, off.goal);
+        let mut end = vec![0.0; off.goal.len()];
+        p.trajectory.sample(p.trajectory.duration(), &mut end, None);
+        assert!(end.iter().zip(&off.goal).all(|(a, b)| (a - b).abs() < 1e-6), "{end:?}");
+    }
 }
 
 #[test]

@@ -13,7 +13,7 @@ use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, 
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
-use hearth_planning::trajectory::Limits;
+use hearth_planning::trajectory::{Limits, Trajectory};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
     PlanRequest, Race, RobotValidity, Rrt, StateValidator,
@@ -62,6 +62,18 @@ pub enum ShortcutKind {
     Random,
     /// Random, then acceleration-bounded (parabolic) shortcutting.
     Parabolic,
+}
+
+/// A jerk-limited pass over each smoothed motion, timed and checked at the fine resolution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum JerkKind {
+    /// None (the default).
+    None,
+    /// The motion's moving average (`Trajectory::with_jerk_limits`).
+    Average,
+    /// Ruckig's waypoint solver through states of the motion every 0.2 rad, as the arm skills'
+    /// waypoint pass takes them (`Trajectory::jerk_limited`).
+    Waypoints,
 }
 
 #[derive(Args, Debug)]
@@ -146,6 +158,11 @@ pub struct BenchPlanArgs {
     /// Shortcut attempts per stage.
     #[arg(long, default_value_t = 100)]
     shortcut_attempts: usize,
+    /// A jerk-limited pass over each smoothed motion that passes the re-check, within the
+    /// robot's jerk limits: its time, its duration against the smoothed motion's, and whether
+    /// it passes the same re-check (reported apart; a plan's success does not depend on it).
+    #[arg(long, value_enum, default_value_t = JerkKind::None)]
+    jerk: JerkKind,
     /// RNG seed. Each plan draws from its own stream, mixed from the seed, the problem id and
     /// the repeat: different seeds give unrelated streams.
     #[arg(long, default_value_t = 0)]
@@ -590,7 +607,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                 // Re-validate the whole timed motion at the fine resolution.
                                 let check = out.trajectory.check(&space, &mut v, fine_resolution);
                                 row["success"] = json!(check.is_ok());
-                                if let Err(e) = check {
+                                if let Err(e) = &check {
                                     row["error"] = json!(format!(
                                         "path fails re-validation at the fine resolution: {e} of {:.4} s",
                                         out.trajectory.duration()
@@ -600,6 +617,24 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                 row["smoothing_fell_back"] = json!(out.fell_back);
                                 row["path_length"] = json!(out.trajectory.length(&space, a.resolution));
                                 row["duration_s"] = json!(out.trajectory.duration());
+                                if check.is_ok() && a.jerk != JerkKind::None {
+                                    let t0 = Instant::now();
+                                    let jerk = match a.jerk {
+                                        JerkKind::Average => out.trajectory.with_jerk_limits(&rs.limits),
+                                        _ => Trajectory::jerk_limited(
+                                            &space,
+                                            &out.trajectory.to_path(&space, 0.2),
+                                            &rs.limits,
+                                        ),
+                                    };
+                                    row["jerk_time_s"] = json!(t0.elapsed().as_secs_f64());
+                                    if let Ok(j) = jerk {
+                                        row["jerk_duration_s"] = json!(j.duration());
+                                        row["jerk_valid"] = json!(j.check(&space, &mut v, fine_resolution).is_ok());
+                                    } else {
+                                        row["jerk_valid"] = json!(false);
+                                    }
+                                }
                                 if a.emit_paths {
                                     row["path"] = json!(out.path.states);
                                 }
@@ -652,6 +687,26 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         let name = label(robot, "all");
         summary.insert(name.clone(), summarize(&name, &rows));
     }
+    if a.jerk != JerkKind::None {
+        println!(
+            "\n{:<22} {:>15} {:>11} {:>11} {:>16}",
+            "jerk pass", "collision-free", "median ms", "p90 ms", "duration ratio"
+        );
+        for (name, s) in &summary {
+            let j = &s["jerk_pass"];
+            if let (Some(n), Some(free)) = (j["motions"].as_u64(), j["collision_free"].as_u64()) {
+                let f = |key: &str, digits: usize| j[key].as_f64().map_or("-".to_owned(), |v| format!("{v:.digits$}"));
+                println!(
+                    "{:<22} {:>15} {:>11} {:>11} {:>16}",
+                    name,
+                    format!("{free}/{n}"),
+                    f("time_ms_median", 3),
+                    f("time_ms_p90", 3),
+                    f("duration_ratio_median", 3)
+                );
+            }
+        }
+    }
     if let Some(path) = a.json {
         let out = json!({"results": results, "summary": summary});
         std::fs::write(&path, serde_json::to_string(&out)?).with_context(|| format!("writing {}", path.display()))?;
@@ -680,6 +735,22 @@ fn summarize(name: &str, rows: &[&Value]) -> Value {
     // No rate when nothing was attempted (every plan skipped).
     let rate = (!attempted.is_empty()).then(|| ok.len() as f64 / attempted.len() as f64);
     let fell_back = ok.iter().filter(|r| r["smoothing_fell_back"] == json!(true)).count();
+    let jerk_rows: Vec<&Value> = ok.iter().copied().filter(|r| r.get("jerk_valid").is_some()).collect();
+    let jerk = (!jerk_rows.is_empty()).then(|| {
+        let valid = jerk_rows.iter().filter(|r| r["jerk_valid"] == json!(true)).count();
+        let ms: Vec<f64> = jerk_rows
+            .iter()
+            .filter_map(|r| r["jerk_time_s"].as_f64())
+            .map(|t| t * 1e3)
+            .collect();
+        let ratio: Vec<f64> = jerk_rows
+            .iter()
+            .filter_map(|r| Some(r["jerk_duration_s"].as_f64()? / r["duration_s"].as_f64()?))
+            .collect();
+        json!({"motions": jerk_rows.len(), "collision_free": valid,
+               "time_ms_median": percentile(&ms, 0.5), "time_ms_p90": percentile(&ms, 0.9),
+               "duration_ratio_median": percentile(&ratio, 0.5)})
+    });
     // A column without successful plans (NaN) prints as "-".
     let cell = |v: f64, digits: usize| {
         if v.is_nan() {
@@ -707,7 +778,7 @@ fn summarize(name: &str, rows: &[&Value]) -> Value {
            "plan_time_ms_median": time_median, "plan_time_ms_p95": time_p95,
            "path_length_median": length, "checks_median": checks,
            "shortcut_time_ms_median": shortcut, "motion_duration_s_median": duration,
-           "smoothing_fell_back": fell_back})
+           "smoothing_fell_back": fell_back, "jerk_pass": jerk})
 }
 
 /// Progress on stderr: one line rewritten in place on a terminal; otherwise (a log file, a

@@ -117,3 +117,26 @@ pub(crate) fn eval(trajectory: &Generated, t: f64, q: &mut [f64], mut v: Option<
         }
     });
 }
+
+/// Appends the times where a ruckig trajectory's phases change (every coordinate's, every
+/// section's), as [`Generated::state_to_integrate_from`] walks them.
+pub(crate) fn knots(trajectory: &Generated, out: &mut Vec<f64>) {
+    for (section, profiles) in trajectory.profiles.iter().enumerate() {
+        let start = if section == 0 {
+            0.0
+        } else {
+            trajectory.cumulative_times[section - 1]
+        };
+        out.push(start);
+        for dof in 0..profiles.len() {
+            let p = &profiles[dof];
+            let mut from = start;
+            if section == 0 && p.brake.duration > 0.0 {
+                out.push(start + p.brake.t[0]);
+                from += p.brake.duration;
+                out.push(from);
+            }
+            out.extend(p.t_sum.iter().map(|t| from + t));
+        }
+    }
+}

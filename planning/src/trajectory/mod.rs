@@ -1,11 +1,12 @@
 //! Time-parametrised trajectories: rest-to-rest straight segments, acceleration-bounded
-//! ("parabolic") ramps from shortcutting, and jerk-limited motions through waypoints computed
-//! by Ruckig (the pure-Rust `rsruckig`, entirely local).
+//! ("parabolic") ramps from shortcutting, jerk-limited motions through waypoints computed by
+//! Ruckig (the pure-Rust `rsruckig`, entirely local), and any of these jerk-limited by a
+//! moving average ([`Trajectory::with_jerk_limits`]).
 //!
 //! A [`Trajectory`] is a sequence of spans, each a time window of one piece (a straight line
-//! with a trapezoidal speed profile, or a ruckig motion). Coordinates are *unwrapped*:
-//! continuous joints may leave `(-π, π]` so that velocities stay continuous;
-//! [`Trajectory::to_path`] wraps them back.
+//! with a trapezoidal speed profile, a ruckig motion, or another trajectory's moving
+//! average). Coordinates are *unwrapped*: continuous joints may leave `(-π, π]` so that
+//! velocities stay continuous; [`Trajectory::to_path`] wraps them back.
 //!
 //! ```
 //! use hearth_planning::planner::Path;
@@ -24,6 +25,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod average;
 mod generator;
 mod limits;
 mod ramp;
@@ -36,6 +38,7 @@ use crate::error::Num;
 use crate::planner::{Path, positive, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
+use average::Averaged;
 use generator::{Generated, Sync};
 use ramp::LineRamp;
 
@@ -164,6 +167,7 @@ pub enum TrajectoryError {
 enum Piece {
     Line(LineRamp),
     Generated(Box<Generated>),
+    Averaged(Box<Averaged>),
 }
 
 impl Piece {
@@ -171,6 +175,16 @@ impl Piece {
         match self {
             Piece::Line(l) => l.duration(),
             Piece::Generated(g) => g.get_duration(),
+            Piece::Averaged(a) => a.duration(),
+        }
+    }
+
+    /// Appends the piece's own times (from its start) where its polynomials change.
+    fn knots(&self, out: &mut Vec<f64>) {
+        match self {
+            Piece::Line(l) => out.extend(l.knots()),
+            Piece::Generated(g) => generator::knots(g, out),
+            Piece::Averaged(a) => a.knots(out),
         }
     }
 
@@ -178,6 +192,7 @@ impl Piece {
         match self {
             Piece::Line(l) => l.eval(t, q, v),
             Piece::Generated(g) => generator::eval(g, t, q, v),
+            Piece::Averaged(a) => a.eval(t, q, v),
         }
     }
 }
@@ -298,6 +313,25 @@ impl Trajectory {
         self.ends
             .partition_point(|&end| end < t)
             .min(self.spans.len().saturating_sub(1))
+    }
+
+    /// Appends the times where the motion's polynomials change: the spans' starts and the
+    /// knots of their pieces within them.
+    pub(crate) fn knots(&self, out: &mut Vec<f64>) {
+        let mut local = Vec::new();
+        let mut start = 0.0;
+        for s in &self.spans {
+            out.push(start);
+            local.clear();
+            s.piece.knots(&mut local);
+            out.extend(
+                local
+                    .iter()
+                    .filter(|&&k| k > s.offset && k < s.offset + s.duration)
+                    .map(|&k| start + (k - s.offset)),
+            );
+            start += s.duration;
+        }
     }
 
     fn recompute_ends(&mut self) {
@@ -431,7 +465,7 @@ impl Trajectory {
     /// state-to-state solve per try, and keeps those that shorten the motion. Its cost grows
     /// with the sweeps, the waypoints and the joints; 0 keeps the first choice: the same
     /// limits and waypoints, a slower motion, computed much sooner (see `docs/benchmarks.md`,
-    /// "Jerk-limited motions through waypoints").
+    /// "Jerk-limited motions").
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -495,6 +529,64 @@ impl Trajectory {
             pieces.push(Piece::Line(LineRamp::new(&states[0], &zero, limits)));
         }
         Ok(Self::from_pieces(space.dim(), pieces))
+    }
+
+    /// This motion with its jerk bounded by `limits`: its moving average over a window of
+    /// `w = max 2 a_i / j_i` seconds (the largest over coordinates with a finite jerk limit).
+    /// Averaging keeps the motion's velocity and acceleration bounds and its position bounds,
+    /// and bounds its jerk by `2 a_i / w ≤ j_i` when the motion respects the acceleration
+    /// limits of `limits` (as one built with them or with [`Limits::scaled`] ones does). The
+    /// result lasts `w` longer, starts and ends at rest with zero acceleration, and stays
+    /// within `a_i w² / 24` of this motion delayed by `w / 2` (Panda: 1.3 × 10⁻⁵ rad;
+    /// Fetch: 6 × 10⁻⁴ rad), so unlike [`Trajectory::jerk_limited`] it follows the checked
+    /// motion instead of re-solving a path through its samples, and takes microseconds
+    /// instead of up to a second (see `docs/benchmarks.md`, "Jerk-limited motions"). It may
+    /// still leave a tight passage by that much: check it ([`Trajectory::check`]). With no
+    /// finite jerk limit, or a motion of duration 0, the motion is returned as it is.
+    ///
+    /// # Errors
+    /// [`TrajectoryError::Dimension`] when `limits` has another number of coordinates.
+    ///
+    /// ```
+    /// use hearth_planning::planner::Path;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    ///
+    /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let limits = Limits::new(vec![1.0; 2], vec![2.0; 2], vec![40.0; 2])?;
+    /// let path = Path { states: vec![vec![0.1, 0.1], vec![0.8, 0.1], vec![0.8, 0.9]] };
+    /// let steps = Trajectory::rest_to_rest(&space, &path, &limits)?; // acceleration steps
+    /// let smooth = steps.with_jerk_limits(&limits)?;
+    /// let w = 2.0 * 2.0 / 40.0; // the window: 0.1 s
+    /// assert!((smooth.duration() - (steps.duration() + w)).abs() < 1e-12);
+    /// let (mut q, mut v) = ([0.0; 2], [0.0; 2]);
+    /// smooth.sample(smooth.duration(), &mut q, Some(&mut v));
+    /// assert!((q[0] - 0.8).abs() < 1e-12 && (q[1] - 0.9).abs() < 1e-12 && v == [0.0; 2]);
+    /// // Within a w²/24 · a of the stepped motion, half a window later.
+    /// let mut p = [0.0; 2];
+    /// for k in 0..=100 {
+    ///     let t = steps.duration() * k as f64 / 100.0;
+    ///     steps.sample(t, &mut p, None);
+    ///     smooth.sample(t + w / 2.0, &mut q, None);
+    ///     assert!((0..2).all(|i| (q[i] - p[i]).abs() <= 2.0 * w * w / 24.0 + 1e-12));
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_jerk_limits(&self, limits: &Limits) -> Result<Self, TrajectoryError> {
+        check_dim(limits, self.dim)?;
+        let width = limits
+            .acceleration()
+            .iter()
+            .zip(limits.jerk())
+            .map(|(&a, &j)| if j.is_finite() { 2.0 * a / j } else { 0.0 })
+            .fold(0.0, f64::max);
+        if !(width > 0.0 && width.is_finite()) || self.duration() <= 0.0 {
+            return Ok(self.clone());
+        }
+        Ok(Self::from_pieces(
+            self.dim,
+            vec![Piece::Averaged(Box::new(Averaged::new(self.clone(), width)))],
+        ))
     }
 
     /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` within `limits` (Ruckig; with

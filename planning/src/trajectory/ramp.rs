@@ -52,6 +52,11 @@ impl LineRamp {
         self.duration
     }
 
+    /// The times where the speed profile changes phase (end of speeding up, end of cruising).
+    pub(crate) fn knots(&self) -> [f64; 2] {
+        [self.t_acc, self.t_acc + self.t_cruise]
+    }
+
     /// Path parameter and its rate at time `t`.
     fn profile(&self, t: f64) -> (f64, f64) {
         if self.duration <= 0.0 {

@@ -352,13 +352,7 @@ impl PushDataset {
             },
         )
         .map_err(SkillError::from)?;
-        // A cheaper jerk-limited pass: a push's approach need not follow the smoothed motion
-        // closely (it is collision-checked), and the Ruckig pass dominated a push's planning.
-        let arm_settings = ArmSettings {
-            jerk_waypoints: Some(16),
-            ..ArmSettings::fetch()
-        };
-        let arm = Arm::new(&world, robot, arm_settings)?;
+        let arm = Arm::new(&world, robot, ArmSettings::fetch())?;
         Ok(Self {
             home: world.snapshot(),
             world,
