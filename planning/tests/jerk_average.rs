@@ -67,6 +67,20 @@ fn brute_mean(source: &Trajectory, t: f64) -> [f64; 2] {
     sum
 }
 
+/// `smooth` equals the brute-force mean of `source` at 41 times across it.
+fn assert_is_mean_of(source: &Trajectory, smooth: &Trajectory) {
+    let mut q = [0.0; 2];
+    for k in 0..=40 {
+        let t = smooth.duration() * k as f64 / 40.0;
+        smooth.sample(t, &mut q, None);
+        let mean = brute_mean(source, t);
+        assert!(
+            (q[0] - mean[0]).abs() < 1e-7 && (q[1] - mean[1]).abs() < 1e-7,
+            "{q:?} {mean:?} at {t}"
+        );
+    }
+}
+
 /// Checks everything the averaged motion promises, sampling every `dt`.
 fn assert_averaged(source: &Trajectory, smooth: &Trajectory) -> Result<(), TestCaseError> {
     prop_assert!((smooth.duration() - source.duration() - W).abs() < 1e-12);
@@ -156,16 +170,7 @@ fn a_ramp_from_a_moving_start_and_a_line_are_averaged_exactly() {
     .unwrap();
     let source = ramp.then(motion).unwrap();
     let smooth = source.with_jerk_limits(&jerk_limits()).unwrap();
-    let mut q = [0.0; 2];
-    for k in 0..=40 {
-        let t = smooth.duration() * k as f64 / 40.0;
-        smooth.sample(t, &mut q, None);
-        let mean = brute_mean(&source, t);
-        assert!(
-            (q[0] - mean[0]).abs() < 1e-7 && (q[1] - mean[1]).abs() < 1e-7,
-            "{q:?} {mean:?}"
-        );
-    }
+    assert_is_mean_of(&source, &smooth);
 }
 
 #[test]
@@ -174,16 +179,7 @@ fn averaging_twice_is_still_exact() {
     let once = source.with_jerk_limits(&jerk_limits()).unwrap();
     let twice = once.with_jerk_limits(&jerk_limits()).unwrap();
     assert!((twice.duration() - source.duration() - 2.0 * W).abs() < 1e-12);
-    let mut q = [0.0; 2];
-    for k in 0..=40 {
-        let t = twice.duration() * k as f64 / 40.0;
-        twice.sample(t, &mut q, None);
-        let mean = brute_mean(&once, t);
-        assert!(
-            (q[0] - mean[0]).abs() < 1e-7 && (q[1] - mean[1]).abs() < 1e-7,
-            "{q:?} {mean:?}"
-        );
-    }
+    assert_is_mean_of(&once, &twice);
 }
 
 #[test]
