@@ -887,13 +887,10 @@ impl Obstacles for ParryScene {
             lo = lo.min(c - r);
             hi = hi.max(c + r);
         }
-        let [x0, y0, z0, x1, y1, z1] = &self.boxes.bounds;
-        for i in 0..self.quick.len() {
-            if x0[i] > hi.x || y0[i] > hi.y || z0[i] > hi.z || x1[i] < lo.x || y1[i] < lo.y || z1[i] < lo.z {
-                continue;
-            }
-            let q = &self.quick[i];
-            match q.balls(balls, n, self.margin) {
+        // Eight obstacles' boxes at a time against the batch's box, in index order, until
+        // every ball touches something.
+        self.boxes.first_overlapping(&Aabb::new(lo, hi), |i| {
+            match self.quick[i].balls(balls, n, self.margin) {
                 Some(m) => hit |= m & all,
                 None => {
                     for j in 0..n {
@@ -906,10 +903,8 @@ impl Obstacles for ParryScene {
                     }
                 }
             }
-            if hit == all {
-                break;
-            }
-        }
+            hit == all
+        });
         hit
     }
 
@@ -931,16 +926,11 @@ impl Obstacles for ParryScene {
         }
         // Only obstacles whose box meets the balls' box grown by `max` can come nearer.
         if self.quick.len() <= SCAN_LIMIT {
-            let [x0, y0, z0, x1, y1, z1] = &self.boxes.bounds;
-            for i in 0..self.quick.len() {
-                if x0[i] > hi.x || y0[i] > hi.y || z0[i] > hi.z || x1[i] < lo.x || y1[i] < lo.y || z1[i] < lo.z {
-                    continue;
-                }
-                if !self.quick[i].clearance(balls, n, self.margin, out) {
-                    return false;
-                }
-            }
-            true
+            self.boxes
+                .first_overlapping(&Aabb::new(lo, hi), |i| {
+                    !self.quick[i].clearance(balls, n, self.margin, out)
+                })
+                .is_none()
         } else {
             self.bvh
                 .intersect_aabb(&Aabb::new(lo, hi))
