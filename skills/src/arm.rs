@@ -55,8 +55,8 @@ pub enum JerkPass {
     /// a window of `w = 2 a / j` longer (0.06 s for the Fetch at the default velocity scale),
     /// within `a w² / 24` of the checked motion (2 × 10⁻⁴ rad).
     Average,
-    /// Ruckig's waypoint solver through states of the smoothed motion every 0.2 rad
-    /// ([`Trajectory::jerk_limited_with`]): at most `max` of them, evenly spread (`None`: all),
+    /// Ruckig's waypoint solver through states of the smoothed motion every
+    /// [`WAYPOINT_SPACING`] ([`Trajectory::jerk_limited_with`]): at most `max` of them, evenly spread (`None`: all),
     /// refined by `sweeps` sweeps of its local search. Each sweep costs about as much as the
     /// last (about 0.3 s for a Fetch motion of 69 waypoints); 0 takes milliseconds but gives a
     /// motion several times slower. It may cut corners between the waypoints.
@@ -69,6 +69,14 @@ pub enum JerkPass {
     /// None: the smoothed motion as it is.
     Off,
 }
+
+/// Joint-space spacing (rad) of the states of a smoothed motion that Ruckig's waypoint pass
+/// ([`JerkPass::Waypoints`]) goes through, before any thinning to `max`.
+///
+/// ```
+/// assert_eq!(hearth_skills::arm::WAYPOINT_SPACING, 0.2);
+/// ```
+pub const WAYPOINT_SPACING: f64 = 0.2;
 
 /// Settings of an [`Arm`].
 ///
@@ -867,7 +875,7 @@ impl Arm {
         let jerk = match self.settings.jerk {
             JerkPass::Average => Some(smoothed.trajectory.with_jerk_limits(&self.limits)),
             JerkPass::Waypoints { max, sweeps } => {
-                let mut waypoints = smoothed.trajectory.to_path(&self.space, 0.2);
+                let mut waypoints = smoothed.trajectory.to_path(&self.space, WAYPOINT_SPACING);
                 if let Some(max) = max {
                     thin_waypoints(&mut waypoints.states, max);
                 }

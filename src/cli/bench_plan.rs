@@ -19,6 +19,7 @@ use hearth_planning::{
     PlanRequest, Race, RobotValidity, Rrt, StateValidator,
 };
 use hearth_sim::randomize::mix;
+use hearth_skills::arm::WAYPOINT_SPACING;
 use rand::SeedableRng;
 use serde_json::{Value, json};
 
@@ -71,8 +72,8 @@ pub enum JerkKind {
     None,
     /// The motion's moving average (`Trajectory::with_jerk_limits`).
     Average,
-    /// Ruckig's waypoint solver through states of the motion every 0.2 rad, as the arm skills'
-    /// waypoint pass takes them (`Trajectory::jerk_limited`).
+    /// Ruckig's waypoint solver through states of the motion `hearth_skills::arm::WAYPOINT_SPACING`
+    /// (0.2 rad) apart, as the arm skills' waypoint pass takes them (`Trajectory::jerk_limited`).
     Waypoints,
 }
 
@@ -621,9 +622,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                     let t0 = Instant::now();
                                     let jerk = match a.jerk {
                                         JerkKind::Average => out.trajectory.with_jerk_limits(&rs.limits),
-                                        _ => Trajectory::jerk_limited(
+                                        JerkKind::Waypoints | JerkKind::None => Trajectory::jerk_limited(
                                             &space,
-                                            &out.trajectory.to_path(&space, 0.2),
+                                            &out.trajectory.to_path(&space, WAYPOINT_SPACING),
                                             &rs.limits,
                                         ),
                                     };
