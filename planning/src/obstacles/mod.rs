@@ -28,6 +28,7 @@
 //! ```
 
 mod balls;
+mod gjk;
 mod scene;
 
 use std::fmt;

@@ -10,6 +10,7 @@ use std::ops::{Add, Mul, Sub};
 
 use wide::f32x8;
 
+use super::gjk::{self, Convex};
 use super::{BallBatch, Obstacle, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
 
 /// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
@@ -236,14 +237,23 @@ impl ParryScene {
     /// [`Obstacles::first_hit`] for small scenes without a margin: a scan of the bounding
     /// boxes, closed forms for a ball (against every obstacle kind but meshes) and for a box
     /// against a box; a cylinder against a box is tested as the box around it first, then by
-    /// the closed-form certificates of [`cylinder_meets_box`], and by parry only where those
-    /// do not settle it; parry for the rest.
+    /// the closed-form certificates of [`cylinder_meets_box`], then by the exact search of
+    /// [`gjk::touch`]; a box or a cylinder against a cylinder by that search; parry where
+    /// none of these settles it, and for the rest.
+    ///
+    /// The search replaced parry's GJK test on these pairs (about 3.6 % fewer planner
+    /// instructions per check on the Fetch's bookshelf and table plans). It also answers
+    /// better: in 2.4 million searches over the Fetch's table_pick, box, bookshelf_thin and
+    /// cage plans, parry called 0.37 % of the pairs touching that the search found apart, a
+    /// fifth of them with a parry distance of 0 too; each of the 14 of those sampled was
+    /// 0.003–2 mm apart by an independent minimisation. The search never found contact where parry did
+    /// not.
     fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
         if let Some(ball) = shape.as_ball() {
             return self.scan_ball(pose.translation, ball.radius);
         }
         // A box is its own box; a cylinder (axis local y) is tested as the box around it
-        // first, then in closed form, and by parry only when neither settles it.
+        // first, then in closed form, then by the search.
         let (obb, exact) = if let Some(cuboid) = shape.as_cuboid() {
             (Obb::at(pose, cuboid.half_extents), true)
         } else if let Some(c) = shape.as_cylinder() {
@@ -253,10 +263,23 @@ impl ParryScene {
                 .boxes
                 .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose));
         };
+        let part = || if exact { obb.convex() } else { obb.cylinder_convex() };
         self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
             Quick::Cuboid(other) => {
                 obb.touches(other)
-                    && (exact || cylinder_meets_box(&obb, other).unwrap_or_else(|| self.touches(i as u32, shape, pose)))
+                    && (exact
+                        || cylinder_meets_box(&obb, other)
+                            .or_else(|| gjk::touch(&part(), &other.convex()))
+                            .unwrap_or_else(|| self.touches(i as u32, shape, pose)))
+            }
+            &Quick::Cylinder {
+                center,
+                axis,
+                half_height,
+                radius,
+            } => {
+                let cylinder = Convex::cylinder(center, axis, half_height, radius);
+                gjk::touch(&part(), &cylinder).unwrap_or_else(|| self.touches(i as u32, shape, pose))
             }
             _ => self.touches(i as u32, shape, pose),
         })
@@ -394,6 +417,17 @@ impl Obb {
         }
     }
 
+    /// The box as the exact search of [`gjk::touch`] takes it.
+    fn convex(&self) -> Convex {
+        Convex::cuboid(self.center, self.axes, self.half)
+    }
+
+    /// The cylinder that this box was built around by [`Obb::at`] (axis `axes[1]`, half
+    /// height `half.y`, radius `half.x`), as [`gjk::touch`] takes it.
+    fn cylinder_convex(&self) -> Convex {
+        Convex::cylinder(self.center, self.axes[1], self.half.y, self.half.x)
+    }
+
     /// Its point nearest to `p` (`p` itself when inside).
     fn nearest_point(&self, p: Vector) -> Vector {
         let q = p - self.center;
@@ -474,7 +508,7 @@ const CYLINDER_BOX_SLACK: Real = 1e-5;
 
 /// Whether a cylinder meets a box, where a closed form settles it: `Some(false)` when one of
 /// eight candidate axes separates them, `Some(true)` when a point lies inside both, `None`
-/// otherwise (the caller then asks parry's GJK test). On cylinders whose bounding boxes
+/// otherwise (the caller then asks [`gjk::touch`]). On cylinders whose bounding boxes
 /// overlap a board, [`ParryScene::first_hit`] takes ~100 ns with these forms against ~220 ns
 /// without them (parry's test alone: ~410 ns); the Panda's MotionBenchMaker cage plans leave
 /// one cylinder-box test in thirty to parry, the Fetch's wedged bookshelf goals one in eight.
