@@ -446,6 +446,7 @@ pub(crate) fn build(
                     var,
                     multiplier: sign * multiplier,
                     offset: sign * offset,
+                    plain: j.origin.rotation.quaternion().coords == nalgebra::Vector4::new(0.0, 0.0, 0.0, 1.0),
                 },
             },
             JointKind::Prismatic => Motion::Prismatic {
