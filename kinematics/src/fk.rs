@@ -100,17 +100,10 @@ impl FkOp {
         };
         let half = L::splat(0.5) * (L::splat(multiplier) * v + L::splat(offset));
         let (s, c) = sin_cos(half);
-        let [aw, ax, ay, az] = parent.q;
-        let q = match axis {
-            Axis::X => [aw * c - ax * s, aw * s + ax * c, ay * c + az * s, az * c - ay * s],
-            Axis::Y => [aw * c - ay * s, ax * c - az * s, aw * s + ay * c, ax * s + az * c],
-            Axis::Z => [aw * c - az * s, ax * c + ay * s, ay * c - ax * s, aw * s + az * c],
-            Axis::General => return parent.then(&self.local_at(v, sin_cos)),
-        };
         let o = &self.origin.translation.vector;
         let r = rotate(&parent.q, &[L::splat(o.x), L::splat(o.y), L::splat(o.z)]);
         PoseLanes {
-            q,
+            q: turn_about(&parent.q, axis, s, c),
             t: [parent.t[0] + r[0], parent.t[1] + r[1], parent.t[2] + r[2]],
         }
     }
@@ -141,14 +134,10 @@ impl FkOp {
             } => {
                 let half = L::splat(0.5) * (L::splat(multiplier) * v + L::splat(offset));
                 let (s, c) = sin_cos(half);
-                let [w, x, y, z] = origin.q;
-                // o · (c + s·e), with e the unit axis quaternion: 8 products instead of 16.
-                let q = match axis {
-                    Axis::X => [w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s],
-                    Axis::Y => [w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s],
-                    _ => [w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s],
-                };
-                PoseLanes { q, t: origin.t }
+                PoseLanes {
+                    q: turn_about(&origin.q, axis, s, c),
+                    t: origin.t,
+                }
             }
             Motion::Revolute {
                 axis,
@@ -286,6 +275,19 @@ fn quat_mul<L: Lanes>(a: &[L; 4], b: &[L; 4]) -> [L; 4] {
         aw * by - ax * bz + ay * bw + az * bx,
         aw * bz + ax * by - ay * bx + az * bw,
     ]
+}
+
+/// `q · (c + s·e)`, `e` the unit quaternion of a frame axis (`Axis::General` is never
+/// classified as one, and counts as z): 8 products instead of the 16 of [`quat_mul`], and
+/// the same value, as the terms the 16 would add are exact zeros.
+#[inline(always)]
+fn turn_about<L: Lanes>(q: &[L; 4], axis: Axis, s: L, c: L) -> [L; 4] {
+    let [w, x, y, z] = *q;
+    match axis {
+        Axis::X => [w * c - x * s, x * c + w * s, y * c + z * s, z * c - y * s],
+        Axis::Y => [w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s],
+        _ => [w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s],
+    }
 }
 
 /// `v` rotated by the unit quaternion `q`: `v + w·t + u × t` with `t = 2 u × v`.
