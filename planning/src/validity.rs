@@ -294,6 +294,15 @@ fn checked_moving_fk(model: &RobotModel, moves: &[bool], attached: &[Attached]) 
     model.fk_subset(|l| moves[l] && anchors.iter().any(|&g| g == l || model.is_ancestor(l, g)))
 }
 
+/// Per geometric link: the links of `moving` that are neither it nor its ancestors (the
+/// complement of its ancestry within `moving`).
+fn rest_subsets(model: &RobotModel, geometric: &[usize], moving: &FkSubset, moves: &[bool]) -> Vec<FkSubset> {
+    geometric
+        .iter()
+        .map(|&g| model.fk_subset(|l| moving.contains(l) && !(moves[l] && (l == g || model.is_ancestor(l, g)))))
+        .collect()
+}
+
 /// Which links move when the chain's joints move: those below a chain joint, or below a joint
 /// that mimics one.
 fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
@@ -368,6 +377,12 @@ pub struct RobotValidity {
     /// it (itself included), so that a state can be tested against the part that hit last
     /// before the whole robot's forward kinematics is computed.
     ancestry_fk: Vec<FkSubset>,
+    /// Per geometric link that moves with the chain: the other links of `moving_fk`, whose
+    /// poses [`RobotValidity::hint_link_hits`] computes only once the hinted link is clear.
+    rest_fk: Vec<FkSubset>,
+    /// Set by [`RobotValidity::hint_link_hits`] when it found the hinted link clear on the
+    /// current poses, so that [`RobotValidity::robot_blocked`] does not test it again.
+    hint_clear: bool,
     /// Four configurations checked together ([`StateValidator::first_invalid`]): full
     /// configurations and pose buffers, one per lane.
     lane_q: [Vec<f64>; 4],
@@ -400,10 +415,6 @@ const FREE_RADIUS_SLACK: f64 = 1e-4;
 /// keeps the joint step bounded near singular configurations.
 const TOOL_STEP_DAMPING: f64 = 1e-2;
 
-/// Checks in a row settled by the same part of a link after which the next check first
-/// tests that part alone, on the poses of its link's ancestors only (after one, it is tested
-/// first on the whole robot's poses).
-const PARTIAL_FK_STREAK: u32 = 3;
 /// Parts meeting a link's touching cover balls from which their bounding balls are asked
 /// about in one batch before the exact tests ([`RobotValidity::touched_parts_hit`]).
 const PART_BATCH_MIN: u32 = 2;
@@ -750,6 +761,7 @@ impl RobotValidity {
             .iter()
             .map(|&g| model.fk_subset(|l| moves[l] && (l == g || model.is_ancestor(l, g))))
             .collect();
+        let rest_fk = rest_subsets(&model, &geometric, &moving_fk, &moves);
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves, &pair_moves);
@@ -777,6 +789,8 @@ impl RobotValidity {
             fixed_clear: None,
             moving_fk,
             ancestry_fk,
+            rest_fk,
+            hint_clear: false,
             fixed_poses_current: false,
             lane_q: std::array::from_fn(|_| model.neutral_configuration()),
             lane_poses: std::array::from_fn(|_| model.pose_buffer()),
@@ -943,6 +957,7 @@ impl RobotValidity {
             // A frame without geometry may now hold an object: follow it, from a full pass.
             let moves = moving_links(&self.model, &self.chain);
             self.moving_fk = checked_moving_fk(&self.model, &moves, &self.attached);
+            self.rest_fk = rest_subsets(&self.model, &self.geometric, &self.moving_fk, &moves);
             self.fixed_poses_current = false;
         }
     }
@@ -993,7 +1008,10 @@ impl RobotValidity {
         // The joints the chain does not move (the Fetch's head, fingers and bellows) are held
         // at this pass's values in the per-check kinematics: composed once, not per check.
         let vars = self.chain.variables();
-        for subset in std::iter::once(&mut self.moving_fk).chain(&mut self.ancestry_fk) {
+        for subset in std::iter::once(&mut self.moving_fk)
+            .chain(&mut self.ancestry_fk)
+            .chain(&mut self.rest_fk)
+        {
             if self
                 .model
                 .fk_subset_hold(subset, &self.q_full, |v| vars.contains(&v))
@@ -1011,29 +1029,53 @@ impl RobotValidity {
         self.fixed_poses_current
     }
 
-    /// Whether the part that settled the last few checks touches an obstacle at `q`,
-    /// computing the poses of only that link and its moving ancestors. Only tried after a
-    /// streak of [`PARTIAL_FK_STREAK`] such checks, so that states that pass do not pay for
-    /// it. On a hit the other moving links' poses are stale; the next check recomputes them.
-    fn hinted_part_hits(&mut self, q: &[f64]) -> bool {
-        let Some((i, l, k)) = self.hinted_part() else {
-            return false;
+    /// With a link hint (a link that settled an earlier check) and the poses of the links
+    /// the chain does not move current: the poses of that link and its moving ancestors
+    /// first, then that link's test (its hinted part first, as in
+    /// [`RobotValidity::robot_blocked`]). `Some(true)` when it touches an obstacle: the other
+    /// links' poses are then stale, and the next check recomputes them. Otherwise the rest of
+    /// the moving links' poses, `hint_clear` set, and `Some(false)`: the poses are complete,
+    /// as [`RobotValidity::update_poses`] leaves them. `None` when the hint does not apply.
+    /// The two passes together compute each moving link's pose once, so a state that passes
+    /// pays nothing for it, and one that the hinted link settles (most colliding states on
+    /// the Fetch's bookshelves) skips the links below and beside it.
+    fn hint_link_hits(&mut self, q: &[f64]) -> Option<bool> {
+        let Hint::Link(i) = self.broad.hint else {
+            return None;
         };
-        if self.broad.hint_streak < PARTIAL_FK_STREAK || !self.fixed_poses_current || q.len() != self.chain.dof() {
-            return false;
+        if !self.fixed_poses_current || q.len() != self.chain.dof() || !self.link_moves[i] {
+            return None;
         }
         self.chain.scatter(q, &mut self.q_full);
-        let hit = self
+        if self
             .model
             .fk_update(&self.ancestry_fk[i], &self.q_full, &mut self.poses)
-            .is_ok()
-            && self.part_hits(l, k).is_some();
-        if hit {
-            self.broad.hint_streak += 1;
-        } else {
-            self.broad.hint_streak = 0;
+            .is_err()
+        {
+            return None;
         }
-        hit
+        let l = self.geometric[i];
+        let b = &mut self.broad;
+        b.epoch = b.epoch.wrapping_add(1);
+        b.world_center[l] = self.poses[l] * b.local_center[l];
+        if let Some((_, l, k)) = self.hinted_part()
+            && self.part_hits(l, k).is_some()
+        {
+            self.broad.hint_streak += 1;
+            return Some(true);
+        }
+        if self.link_blocked(i) {
+            return Some(true);
+        }
+        if self
+            .model
+            .fk_update(&self.rest_fk[i], &self.q_full, &mut self.poses)
+            .is_err()
+        {
+            return None;
+        }
+        self.hint_clear = true;
+        Some(false)
     }
 
     /// With a link hint and right after a check that one of its parts settled: (geometric
@@ -1656,14 +1698,18 @@ impl RobotValidity {
         if self.fixed_blocked() {
             return true;
         }
-        // After a check that one part settled: that part alone first.
-        if let Some((_, l, k)) = self.hinted_part()
+        // After a check that one part settled: that part alone first (unless
+        // `hint_link_hits` found its link clear on these poses).
+        let hint_clear = std::mem::take(&mut self.hint_clear);
+        if !hint_clear
+            && let Some((_, l, k)) = self.hinted_part()
             && self.part_hits(l, k).is_some()
         {
             self.broad.hint_streak += 1;
             return true;
         }
         let first = match self.broad.hint {
+            Hint::Link(_) if hint_clear => false,
             Hint::Link(i) => self.link_blocked(i),
             Hint::Pair(i) => self.pair_blocked(i),
             Hint::None => false,
@@ -1922,11 +1968,14 @@ impl StateValidator for RobotValidity {
         if !q.iter().all(|v| v.is_finite()) {
             return false;
         }
-        if self.hinted_part_hits(q) {
-            return false;
-        }
-        if !self.update_poses(q) {
-            return false;
+        match self.hint_link_hits(q) {
+            Some(true) => return false,
+            Some(false) => {}
+            None => {
+                if !self.update_poses(q) {
+                    return false;
+                }
+            }
         }
         !self.robot_blocked() && !self.attached_blocked()
     }
