@@ -374,8 +374,9 @@ pub struct RobotValidity {
     /// Whether `poses` of the links that do not move are current.
     fixed_poses_current: bool,
     /// Per geometric link that moves with the chain: the moving links from the root down to
-    /// it (itself included), so that a state can be tested against the part that hit last
-    /// before the whole robot's forward kinematics is computed.
+    /// it (itself included), so that a state can be tested against the link that hit last
+    /// before the rest of the robot's forward kinematics is computed
+    /// ([`RobotValidity::hint_link_hits`]).
     ancestry_fk: Vec<FkSubset>,
     /// Per geometric link that moves with the chain: the other links of `moving_fk`, whose
     /// poses [`RobotValidity::hint_link_hits`] computes only once the hinted link is clear.
