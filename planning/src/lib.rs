@@ -79,6 +79,7 @@ pub mod rrt;
 pub mod shortcut;
 pub mod space;
 pub mod trajectory;
+mod twins;
 pub mod validity;
 
 pub use birrt::{BiRrt, Connect, DynamicDomain};

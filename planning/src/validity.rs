@@ -11,6 +11,7 @@ use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 use crate::reach::{Reach, Row};
+use crate::twins::{Twins, last_driven_joints};
 
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
@@ -306,19 +307,7 @@ fn rest_subsets(model: &RobotModel, geometric: &[usize], moving: &FkSubset, move
 /// Which links move when the chain's joints move: those below a chain joint, or below a joint
 /// that mimics one.
 fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
-    let chain_vars = chain.variables();
-    let joints = model.joints();
-    let driven = |j: usize| {
-        let joint = &joints[j];
-        joint.variable.is_some_and(|v| chain_vars.contains(&v))
-            || joint
-                .mimic
-                .as_ref()
-                .is_some_and(|m| joints[m.joint].variable.is_some_and(|v| chain_vars.contains(&v)))
-    };
-    (0..model.links().len())
-        .map(|l| model.joints_to(l).into_iter().any(driven))
-        .collect()
+    last_driven_joints(model, chain).iter().map(Option::is_some).collect()
 }
 
 /// The exact checker: forward kinematics of the whole robot, every link with geometry against
@@ -405,6 +394,9 @@ pub struct RobotValidity {
     tool_q: Vec<f64>,
     tool_poses: Vec<Isometry3<f64>>,
     tool_jacobian: nalgebra::Matrix6xX<f64>,
+    /// Links and pairs that duplicate others for the current reference ([`Twins`]): left out
+    /// of the per-check tests.
+    twins: Twins,
 }
 
 /// States a stretch must hold before a check along a motion finds the free region of its
@@ -766,6 +758,7 @@ impl RobotValidity {
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves, &pair_moves);
+        let twins = Twins::new(&model, &chain, geometric.len(), pairs.len());
         let pair_tables: Vec<Option<Arc<PairTable>>> = pairs
             .iter()
             .zip(&pair_moves)
@@ -803,6 +796,7 @@ impl RobotValidity {
             tool_jacobian: nalgebra::Matrix6xX::zeros(chain.dof()),
             free: std::array::from_fn(|_| Vec::with_capacity(64)),
             next_to: [[0.0; 32]; 4],
+            twins,
             q_full: model.neutral_configuration(),
             poses: model.pose_buffer(),
             model,
@@ -1006,6 +1000,10 @@ impl RobotValidity {
         }
         self.fixed_poses_current = self.model.fk_from(&self.base, &self.q_full, &mut self.poses).is_ok();
         self.lanes_current = false;
+        if self.fixed_poses_current {
+            self.twins
+                .update(&self.model, &self.geometric, &self.pairs, &self.poses);
+        }
         // The joints the chain does not move (the Fetch's head, fingers and bellows) are held
         // at this pass's values in the per-check kinematics: composed once, not per check.
         let vars = self.chain.variables();
@@ -1736,14 +1734,14 @@ impl RobotValidity {
             let bit = 63 - near.leading_zeros() as usize;
             let i = self.broad.moving[bit];
             near &= !(1u64 << bit);
-            if skip != Hint::Link(i) && self.covered_link_blocked(i) {
+            if skip != Hint::Link(i) && !self.twins.link(i) && self.covered_link_blocked(i) {
                 self.broad.hint = Hint::Link(i);
                 return true;
             }
         }
         for k in BallBatch::CAPACITY..self.broad.moving.len() {
             let i = self.broad.moving[k];
-            if skip != Hint::Link(i) && self.link_blocked(i) {
+            if skip != Hint::Link(i) && !self.twins.link(i) && self.link_blocked(i) {
                 self.broad.hint = Hint::Link(i);
                 return true;
             }
@@ -1756,7 +1754,7 @@ impl RobotValidity {
             let d2 = (self.broad.world_center[a as usize] - self.broad.world_center[b as usize]).norm_squared();
             if d2 <= reach2 {
                 let i = self.broad.moving_pair_index[k] as usize;
-                if skip != Hint::Pair(i) && self.pair_blocked_within_reach(i) {
+                if skip != Hint::Pair(i) && !self.twins.pair(i) && self.pair_blocked_within_reach(i) {
                     self.broad.hint = Hint::Pair(i);
                     return true;
                 }
