@@ -21,7 +21,12 @@ type V = Vector3<f64>;
 /// the poses the shapes come from.
 const SEPARATION: f64 = 1e-7;
 /// Steps after which the search gives up (`None`). Boxes and cylinders settle in a handful.
-const MAX_ITERATIONS: usize = 32;
+const MAX_ITERATIONS: usize = 48;
+/// Steps reduced by the quick region tests of [`evolve`]; the rest by [`nearest_feature`].
+/// The quick tests can drop a point the nearest feature needs, and then cycle through the
+/// same few simplices (a pair of boxes 9.8 mm apart did, every four steps); the exact
+/// reduction makes each step's simplex the one nearest the origin, which cannot cycle.
+const QUICK_ITERATIONS: usize = 16;
 
 /// A box or a cylinder in the world, the convex shapes the search takes.
 #[derive(Clone, Copy, Debug)]
@@ -117,7 +122,7 @@ pub(crate) fn touch(a: &Convex, b: &Convex) -> Option<bool> {
     simplex[0] = support(&d);
     let mut n = 1;
     d = -simplex[0];
-    for _ in 0..MAX_ITERATIONS {
+    for step in 0..MAX_ITERATIONS {
         let len = d.norm();
         if len < 1e-12 {
             return None;
@@ -134,7 +139,12 @@ pub(crate) fn touch(a: &Convex, b: &Convex) -> Option<bool> {
         simplex.copy_within(0..n, 1);
         simplex[0] = p;
         n += 1;
-        match evolve(&mut simplex, &mut n, &mut d) {
+        let next = if step < QUICK_ITERATIONS {
+            evolve(&mut simplex, &mut n, &mut d)
+        } else {
+            nearest_feature(&mut simplex, &mut n, &mut d)
+        };
+        match next {
             Step::Contains => return Some(true),
             Step::Unsure => return None,
             Step::Go => {}
@@ -160,6 +170,84 @@ fn evolve(s: &mut [V; 4], n: &mut usize, d: &mut V) -> Step {
         3 => triangle(s, n, d),
         _ => tetrahedron(s, n, d),
     }
+}
+
+/// [`evolve`] by brute force, for the steps after [`QUICK_ITERATIONS`]: of every set of the
+/// simplex's points whose affine hull's point nearest the origin lies inside them (all
+/// barycentric weights positive), the nearest; the simplex becomes that set and `d` points
+/// from that point to the origin. `Contains` when it is the whole tetrahedron, `Unsure` when
+/// the origin lies on the simplex (to rounding) or no set qualifies.
+fn nearest_feature(s: &mut [V; 4], n: &mut usize, d: &mut V) -> Step {
+    let mut best: Option<(f64, u8, V)> = None;
+    for mask in 1u8..(1 << *n) {
+        let mut points = [V::zeros(); 4];
+        let mut k = 0;
+        for (i, p) in s.iter().enumerate().take(*n) {
+            if mask & (1 << i) != 0 {
+                points[k] = *p;
+                k += 1;
+            }
+        }
+        let Some(x) = affine_nearest(&points[..k]) else {
+            continue;
+        };
+        let d2 = x.norm_squared();
+        if best.is_none_or(|(b, ..)| d2 < b) {
+            best = Some((d2, mask, x));
+        }
+    }
+    let Some((d2, mask, x)) = best else {
+        return Step::Unsure;
+    };
+    if *n == 4 && mask == 0b1111 {
+        return Step::Contains;
+    }
+    let scale = s[..*n].iter().map(|p| p.norm_squared()).fold(0.0, f64::max);
+    if d2 <= 1e-24 * scale {
+        return Step::Unsure;
+    }
+    let mut k = 0;
+    for i in 0..*n {
+        if mask & (1 << i) != 0 {
+            s[k] = s[i];
+            k += 1;
+        }
+    }
+    *n = k;
+    *d = -x;
+    Step::Go
+}
+
+/// The point of the affine hull of `points` (1 to 4 of them) nearest the origin, when it lies
+/// strictly inside their convex hull; `None` when it does not, or when the points are
+/// (nearly) affinely dependent.
+fn affine_nearest(points: &[V]) -> Option<V> {
+    let p0 = points[0];
+    let m = points.len() - 1;
+    if m == 0 {
+        return Some(p0);
+    }
+    // x = p0 + E·μ nearest the origin: (EᵀE)·μ = −Eᵀp0, padded to 3 × 3 with the identity.
+    let mut gram = nalgebra::Matrix3::identity();
+    let mut rhs = V::zeros();
+    let mut size = 1.0;
+    for i in 0..m {
+        let ei = points[i + 1] - p0;
+        size *= ei.norm_squared();
+        rhs[i] = -ei.dot(&p0);
+        for j in 0..m {
+            gram[(i, j)] = ei.dot(&(points[j + 1] - p0));
+        }
+    }
+    if gram.determinant().abs() <= 1e-18 * size {
+        return None;
+    }
+    let mu = gram.lu().solve(&rhs)?;
+    let first = 1.0 - mu.iter().take(m).sum::<f64>();
+    if first <= 0.0 || mu.iter().take(m).any(|&w| w <= 0.0) {
+        return None;
+    }
+    Some((0..m).fold(p0, |x, i| x + (points[i + 1] - p0) * mu[i]))
 }
 
 fn line(s: &mut [V; 4], n: &mut usize, d: &mut V) -> Step {
@@ -384,6 +472,37 @@ mod tests {
         );
         assert_eq!(touch(&gripper, &can), Some(false));
         assert_eq!(touch(&can, &gripper), Some(false));
+    }
+
+    /// Two boxes 9.8 mm apart (parry's distance) on which the quick region tests cycle through
+    /// the same four simplices: the exact reduction after them finds the gap, both ways round.
+    #[test]
+    fn boxes_that_cycle_the_quick_steps_are_found_apart() {
+        let a = shape(
+            true,
+            V::new(0.2335184443914514, 0.044671568462213956, -0.021975402340657944),
+            rotation(
+                [-0.34504790876118663, -0.6858111939455243, -0.24472981259952453],
+                -3.178601409589722,
+            ),
+            0.059243336182449466,
+            0.15064482497703532,
+            0.10087402264150984,
+        );
+        let b = shape(
+            true,
+            V::new(-0.10312605338813129, 0.09629715138315685, -0.2180019583973017),
+            rotation(
+                [0.41542853534829305, 0.48824158947494756, -0.7936531007957252],
+                1.1798130305286763,
+            ),
+            0.047335543645589895,
+            0.14871583386850523,
+            0.17065349716255868,
+        );
+        assert!((parry_distance(&a, &b) - 0.0098).abs() < 1e-4);
+        assert_eq!(touch(&a, &b), Some(false));
+        assert_eq!(touch(&b, &a), Some(false));
     }
 
     proptest! {
