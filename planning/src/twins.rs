@@ -70,6 +70,12 @@ impl Twins {
         }
     }
 
+    /// Which links move when the chain's joints move: those below a joint the chain drives,
+    /// itself or through a mimic.
+    pub(crate) fn moving_links(&self) -> Vec<bool> {
+        self.last_driven.iter().map(Option::is_some).collect()
+    }
+
     /// Whether geometric link `i` is a twin of a link of a lower number.
     #[inline]
     pub(crate) fn link(&self, i: usize) -> bool {
@@ -86,7 +92,7 @@ impl Twins {
 /// Per link of `model`: the last joint on its way from the root that `chain` drives (itself
 /// or through a mimic), `None` for a link that the chain does not move. Two links below the
 /// same such joint keep their relative pose whatever the chain's configuration.
-pub(crate) fn last_driven_joints(model: &RobotModel, chain: &Chain) -> Vec<Option<usize>> {
+fn last_driven_joints(model: &RobotModel, chain: &Chain) -> Vec<Option<usize>> {
     let vars = chain.variables();
     let joints = model.joints();
     let variable = |j: usize| joints[j].variable.is_some_and(|v| vars.contains(&v));

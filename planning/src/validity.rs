@@ -11,7 +11,7 @@ use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 use crate::reach::{Reach, Row};
-use crate::twins::{Twins, last_driven_joints};
+use crate::twins::Twins;
 
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
@@ -292,7 +292,20 @@ fn checked_moving_fk(model: &RobotModel, moves: &[bool], attached: &[Attached]) 
         .filter(|&l| model.link_shape(l).is_some())
         .chain(attached.iter().map(|a| a.link).filter(|&l| l < model.links().len()))
         .collect();
-    model.fk_subset(|l| moves[l] && anchors.iter().any(|&g| g == l || model.is_ancestor(l, g)))
+    model.fk_subset(|l| anchors.iter().any(|&g| moving_ancestry(model, moves, l, g)))
+}
+
+/// Whether link `l` moves with the chain and is link `g` or one of its ancestors.
+fn moving_ancestry(model: &RobotModel, moves: &[bool], l: usize, g: usize) -> bool {
+    moves[l] && (l == g || model.is_ancestor(l, g))
+}
+
+/// Per geometric link: the moving links from the root down to it (itself included).
+fn ancestry_subsets(model: &RobotModel, geometric: &[usize], moves: &[bool]) -> Vec<FkSubset> {
+    geometric
+        .iter()
+        .map(|&g| model.fk_subset(|l| moving_ancestry(model, moves, l, g)))
+        .collect()
 }
 
 /// Per geometric link: the links of `moving` that are neither it nor its ancestors (the
@@ -300,14 +313,8 @@ fn checked_moving_fk(model: &RobotModel, moves: &[bool], attached: &[Attached]) 
 fn rest_subsets(model: &RobotModel, geometric: &[usize], moving: &FkSubset, moves: &[bool]) -> Vec<FkSubset> {
     geometric
         .iter()
-        .map(|&g| model.fk_subset(|l| moving.contains(l) && !(moves[l] && (l == g || model.is_ancestor(l, g)))))
+        .map(|&g| model.fk_subset(|l| moving.contains(l) && !moving_ancestry(model, moves, l, g)))
         .collect()
-}
-
-/// Which links move when the chain's joints move: those below a chain joint, or below a joint
-/// that mimics one.
-fn moving_links(model: &RobotModel, chain: &Chain) -> Vec<bool> {
-    last_driven_joints(model, chain).iter().map(Option::is_some).collect()
 }
 
 /// The exact checker: forward kinematics of the whole robot, every link with geometry against
@@ -748,17 +755,14 @@ impl RobotValidity {
             .filter(|&l| model.link_shape(l).is_some())
             .collect();
         let pairs = matrix.checked_geometric_pairs(&model);
-        let moves = moving_links(&model, &chain);
+        let twins = Twins::new(&model, &chain, geometric.len(), pairs.len());
+        let moves = twins.moving_links();
         let moving_fk = checked_moving_fk(&model, &moves, &[]);
-        let ancestry_fk = geometric
-            .iter()
-            .map(|&g| model.fk_subset(|l| moves[l] && (l == g || model.is_ancestor(l, g))))
-            .collect();
+        let ancestry_fk = ancestry_subsets(&model, &geometric, &moves);
         let rest_fk = rest_subsets(&model, &geometric, &moving_fk, &moves);
         let link_moves: Vec<bool> = geometric.iter().map(|&l| moves[l]).collect();
         let pair_moves: Vec<bool> = pairs.iter().map(|&(a, b)| moves[a] || moves[b]).collect();
         let broad = BroadPhase::new(&model, &geometric, &pairs, &link_moves, &pair_moves);
-        let twins = Twins::new(&model, &chain, geometric.len(), pairs.len());
         let pair_tables: Vec<Option<Arc<PairTable>>> = pairs
             .iter()
             .zip(&pair_moves)
@@ -950,7 +954,7 @@ impl RobotValidity {
         self.attached.push(object);
         if !self.moving_fk.contains(link) {
             // A frame without geometry may now hold an object: follow it, from a full pass.
-            let moves = moving_links(&self.model, &self.chain);
+            let moves = self.twins.moving_links();
             self.moving_fk = checked_moving_fk(&self.model, &moves, &self.attached);
             self.rest_fk = rest_subsets(&self.model, &self.geometric, &self.moving_fk, &moves);
             self.fixed_poses_current = false;
