@@ -30,6 +30,9 @@ use crate::space::Space;
 
 /// States in the linear buffer before they are indexed by a tree.
 const BUFFER: usize = 32;
+/// Buffers of at least this many states are scanned in lanes ([`BufferLanes`]); smaller ones
+/// cost less state by state.
+const BUFFER_SCAN: usize = 5;
 /// Most states in a tree leaf.
 const LEAF: usize = 8;
 /// Entries of a search's stack: more than the height + 1 of any tree over u32 ids.
@@ -76,6 +79,8 @@ pub struct NearestNeighbors {
     removed: Vec<bool>,
     live: usize,
     buffer: Vec<u32>,
+    /// The buffer's states in f32 lanes, as a scanned tree keeps its own.
+    buffer_lanes: BufferLanes,
     trees: Vec<Tree>,
     /// The k-nearest query's heap, kept between queries so that a query does not allocate.
     heap: BinaryHeap<Entry>,
@@ -98,6 +103,7 @@ impl NearestNeighbors {
             removed: Vec::new(),
             live: 0,
             buffer: Vec::with_capacity(BUFFER),
+            buffer_lanes: BufferLanes::default(),
             trees: Vec::new(),
             heap: BinaryHeap::new(),
         }
@@ -282,12 +288,48 @@ impl NearestNeighbors {
             self.trees.push(tree);
         }
         self.buffer = Vec::with_capacity(BUFFER);
+        self.buffer_lanes.written = 0;
+    }
+
+    /// Indexes the buffer and brings its lanes up to date: every query calls this first.
+    fn prepare<S: Space>(&mut self, space: &S) {
+        self.flush(space);
+        if self.buffer.len() < BUFFER_SCAN {
+            return;
+        }
+        if self.buffer_lanes.written == 0 {
+            self.buffer_lanes.start(space, self.dim);
+        }
+        while self.buffer_lanes.written < self.buffer.len() {
+            let id = self.buffer[self.buffer_lanes.written] as usize;
+            self.buffer_lanes.push(&self.states[id * self.dim..(id + 1) * self.dim]);
+        }
     }
 
     fn search<S: Space, C: Collector>(&self, space: &S, q: &[f64], c: &mut C) {
-        for &id in &self.buffer {
-            if !self.removed[id as usize] {
-                c.offer(space.distance(q, self.state(id as usize)), id);
+        let lanes = &self.buffer_lanes;
+        if lanes.usable && self.buffer.len() >= BUFFER_SCAN {
+            let view = LaneView {
+                lanes: &lanes.lanes[..self.buffer.len().div_ceil(LANES) * self.dim * LANES],
+                ids: &self.buffer,
+                weights: &lanes.weights,
+                lane_periods: &lanes.lane_periods,
+                reach: lanes.reach,
+            };
+            if lanes.wraps.is_empty() {
+                view.scan::<S, C, false>(space, self, q, q, c);
+            } else {
+                let mut wrapped = [0.0f64; KD_MAX_DIM];
+                for ((w, &x), &wraps) in wrapped.iter_mut().zip(q).zip(&lanes.wraps) {
+                    *w = if wraps { wrap_angle(x) } else { x };
+                }
+                view.scan::<S, C, true>(space, self, q, &wrapped[..q.len()], c);
+            }
+        } else {
+            for &id in &self.buffer {
+                if !self.removed[id as usize] {
+                    c.offer(space.distance(q, self.state(id as usize)), id);
+                }
             }
         }
         for t in &self.trees {
@@ -319,7 +361,7 @@ impl NearestNeighbors {
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn nearest<S: Space>(&mut self, space: &S, q: &[f64]) -> Option<usize> {
-        self.flush(space);
+        self.prepare(space);
         let mut c = Nearest {
             best: f64::INFINITY,
             id: u32::MAX,
@@ -372,7 +414,7 @@ impl NearestNeighbors {
         if k == 0 {
             return;
         }
-        self.flush(space);
+        self.prepare(space);
         let mut heap = std::mem::take(&mut self.heap);
         heap.reserve(k + 1);
         let mut c = KNearest { k, heap };
@@ -400,7 +442,7 @@ impl NearestNeighbors {
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn within_radius<S: Space>(&mut self, space: &S, q: &[f64], radius: f64) -> Vec<usize> {
-        self.flush(space);
+        self.prepare(space);
         let mut c = Radius {
             radius,
             found: Vec::new(),
@@ -431,6 +473,9 @@ impl Ord for Entry {
 
 /// What a search collects: it offers every candidate and prunes with the current radius.
 trait Collector {
+    /// Whether only the nearest state is collected: then any state's distance bounds the
+    /// radius, and a scan may filter with its lanes' smallest sum so far.
+    const NEAREST: bool = false;
     /// Current search radius: states farther than this cannot be collected.
     fn radius(&self) -> f64;
     /// A live state at distance `d`.
@@ -443,6 +488,7 @@ struct Nearest {
 }
 
 impl Collector for Nearest {
+    const NEAREST: bool = true;
     #[inline]
     fn radius(&self) -> f64 {
         self.best
@@ -926,11 +972,51 @@ impl KdTree {
         4.0 * self.box_distance2::<WRAP>(0, wrapped) >= self.diagonal2
     }
 
-    /// [`KdTree::search`] of a tree with `lanes`: every state's weighted squared distance in
-    /// f32, eight states per step, as a filter that passes every state the leaves' own f64
-    /// filter would pass (its bound is widened by more than the f32 rounding of the states,
-    /// the query and the sums can move a distance); the space's own distance decides, as in a
-    /// leaf, so the answers are the descent's to the last bit.
+    /// [`KdTree::search`] of a tree with `lanes` ([`LaneView::scan`]).
+    #[inline]
+    fn scan<S: Space, C: Collector, const WRAP: bool>(
+        &self,
+        space: &S,
+        index: &NearestNeighbors,
+        q: &[f64],
+        wrapped: &[f64],
+        c: &mut C,
+    ) {
+        LaneView {
+            lanes: &self.lanes,
+            ids: &self.ids,
+            weights: &self.weights,
+            lane_periods: &self.lane_periods,
+            reach: self.reach,
+        }
+        .scan::<S, C, WRAP>(space, index, q, wrapped, c);
+    }
+}
+
+/// States held as weighted f32 coordinates in blocks of [`LANES`] (`dim` rows of [`LANES`]
+/// values per block, the last block padded with NaN, which no filter passes): a scanned
+/// tree's states or the buffer's.
+struct LaneView<'a> {
+    lanes: &'a [f32],
+    /// The state in each lane, block by block.
+    ids: &'a [u32],
+    weights: &'a [f64],
+    /// Per coordinate: its weighted period in f32, infinite for a coordinate that is no angle.
+    lane_periods: &'a [f32],
+    /// Largest weighted magnitude of a coordinate or a period (bounds the f32 rounding).
+    reach: f64,
+}
+
+impl LaneView<'_> {
+    /// Every state's weighted squared distance in f32, eight states per step, as a filter that
+    /// passes every state the leaves' own f64 filter would pass (its bound is widened by more
+    /// than the f32 rounding of the states, the query and the sums can move a distance); the
+    /// space's own distance decides, as in a leaf, so the answers are the descent's to the
+    /// last bit. A nearest-state query also filters the first block with its smallest sum of
+    /// a live state: that state is at most that far (widened the same way), so the nearest
+    /// state's own sum lies within twice the widening of it. Without that bound every state
+    /// of the first block would reach the space's distance while the radius is still
+    /// infinite; after it, the radius set by the states offered prunes as well.
     fn scan<S: Space, C: Collector, const WRAP: bool>(
         &self,
         space: &S,
@@ -942,7 +1028,7 @@ impl KdTree {
         let dim = self.weights.len();
         let mut query = [0.0f32; KD_MAX_DIM];
         let mut reach = self.reach;
-        for ((out, &x), &w) in query.iter_mut().zip(wrapped).zip(&self.weights) {
+        for ((out, &x), &w) in query.iter_mut().zip(wrapped).zip(self.weights) {
             reach = reach.max((w * x).abs());
             *out = (w * x) as f32;
         }
@@ -956,23 +1042,46 @@ impl KdTree {
             f64::INFINITY
         };
         let query = &query[..dim];
+        let to_f32 = |r: f64| {
+            let bound = r * r * (1.0 + 1e-5);
+            if bound < f64::from(f32::MAX) {
+                bound as f32
+            } else {
+                f32::INFINITY
+            }
+        };
+        // The nearest-state bound from the smallest sum so far (infinite until one is seen).
+        let mut least = f32::INFINITY;
+        let mut least_bound = f32::INFINITY;
         for (block, lanes) in self.lanes.chunks_exact(dim * LANES).enumerate() {
             // One block's weighted squared distances: a sum per state, in coordinate order.
             let mut sum = f32x8::ZERO;
-            for ((lane, &x), &period) in lanes.chunks_exact(LANES).zip(query).zip(&self.lane_periods) {
+            for ((lane, &x), &period) in lanes.chunks_exact(LANES).zip(query).zip(self.lane_periods) {
                 let mut d = (f32x8::splat(x) - f32x8::new(lane.try_into().expect("LANES values"))).abs();
                 if WRAP {
                     d = d.min(f32x8::splat(period) - d);
                 }
                 sum += d * d;
             }
-            let r = c.radius() + SLACK + slop;
-            let bound = r * r * (1.0 + 1e-5);
-            let bound = if bound < f64::from(f32::MAX) {
-                bound as f32
-            } else {
-                f32::INFINITY
-            };
+            let mut bound = to_f32(c.radius() + SLACK + slop);
+            if C::NEAREST && block == 0 {
+                // NaN (padding) lanes drop out of `f32::min`.
+                let smallest = sum.to_array().into_iter().fold(f32::INFINITY, f32::min);
+                // (Only a live state's sum bounds the answer.)
+                let live = || {
+                    let lane = sum.simd_eq(f32x8::splat(smallest)).to_bitmask().trailing_zeros() as usize;
+                    self.ids
+                        .get(block * LANES + lane)
+                        .is_some_and(|&id| !index.is_removed(id as usize))
+                };
+                if smallest < least && live() {
+                    least = smallest;
+                    // That state's distance ≤ √(sum·(1 + 10⁻⁵)) + SLACK + slop, and so is the
+                    // nearest state's; its sum then passes this bound.
+                    least_bound = to_f32((f64::from(least) * (1.0 + 1e-5)).sqrt() + 2.0 * (SLACK + slop));
+                }
+                bound = bound.min(least_bound);
+            }
             let mut pass = sum.simd_le(f32x8::splat(bound)).to_bitmask();
             while pass != 0 {
                 let k = block * LANES + pass.trailing_zeros() as usize;
@@ -983,6 +1092,81 @@ impl KdTree {
                 }
             }
         }
+    }
+}
+
+/// The linear buffer's states as lanes ([`LaneView`]), written by the queries, which know the
+/// space's weights.
+#[derive(Clone, Debug, Default)]
+struct BufferLanes {
+    /// Room for [`BUFFER`] states.
+    lanes: Vec<f32>,
+    weights: Vec<f64>,
+    /// Which coordinates are angles (empty: none); their lanes hold them wrapped into
+    /// `(−π, π]`.
+    wraps: Vec<bool>,
+    lane_periods: Vec<f32>,
+    reach: f64,
+    /// Buffer entries written so far (0 after a flush: the next query starts anew).
+    written: usize,
+    /// Whether the space has a weighted metric and every written state is small enough for
+    /// the lanes' rounding bound; else the buffer is searched by the space's distance alone.
+    usable: bool,
+}
+
+impl BufferLanes {
+    /// Reads the space's metric for a new buffer, as [`NearestNeighbors::flush`] does for a
+    /// tree, and clears the lanes.
+    fn start<S: Space>(&mut self, space: &S, dim: usize) {
+        self.weights.clear();
+        self.wraps.clear();
+        self.lane_periods.clear();
+        self.reach = 0.0;
+        self.usable = false;
+        let metric = space
+            .euclidean_weights()
+            .map(|w| (w, None))
+            .or_else(|| space.wrapping_weights().map(|(w, wraps)| (w, Some(wraps))))
+            .filter(|(w, wraps)| dim <= KD_MAX_DIM && w.len() == dim && wraps.is_none_or(|x| x.len() == dim));
+        let Some((weights, wraps)) = metric else {
+            return;
+        };
+        self.weights.extend_from_slice(weights);
+        if let Some(wraps) = wraps.filter(|w| w.contains(&true)) {
+            self.wraps.extend_from_slice(wraps);
+        }
+        for (axis, &w) in weights.iter().enumerate() {
+            if self.wraps.get(axis) == Some(&true) {
+                self.reach = self.reach.max(w * TAU);
+                self.lane_periods.push((w * TAU) as f32);
+            } else {
+                self.lane_periods.push(f32::INFINITY);
+            }
+        }
+        self.lanes.clear();
+        self.lanes.resize(BUFFER.div_ceil(LANES) * dim * LANES, f32::NAN);
+        self.usable = self.reach.is_finite() && self.reach < 1e6;
+    }
+
+    /// Writes the next buffer entry's lanes.
+    fn push(&mut self, q: &[f64]) {
+        let (k, dim) = (self.written, self.weights.len());
+        self.written += 1;
+        if !self.usable {
+            return;
+        }
+        let block = &mut self.lanes[(k / LANES) * dim * LANES..][..dim * LANES];
+        for (axis, (&x, &w)) in q.iter().zip(&self.weights).enumerate() {
+            let x = if self.wraps.get(axis) == Some(&true) {
+                wrap_angle(x)
+            } else {
+                x
+            };
+            let v = w * x;
+            self.reach = self.reach.max(v.abs());
+            block[axis * LANES + k % LANES] = v as f32;
+        }
+        self.usable = self.reach < 1e6;
     }
 }
 

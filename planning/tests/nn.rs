@@ -373,3 +373,42 @@ fn no_state_is_lost_when_trees_merge() {
     interleaved_agrees_with_brute_force(&bounded, 6_000);
     interleaved_agrees_with_brute_force(&se2_space(), 3_000);
 }
+
+#[test]
+fn buffered_states_are_filtered_in_lanes_and_removed_ones_skipped() {
+    // 31 states stay in the linear buffer (it is indexed by a tree at 32).
+    let space = Counting {
+        inner: JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false]).unwrap(),
+        calls: Default::default(),
+        euclidean: true,
+    };
+    let mut nn = NearestNeighbors::new(2);
+    let mut rng = Pcg64Mcg::seed_from_u64(4);
+    let mut states = Vec::new();
+    for _ in 0..31 {
+        let mut s = [0.0; 2];
+        space.sample(&mut rng, &mut s);
+        nn.insert(&s);
+        states.push(s);
+    }
+    let q = [0.05, -0.3];
+    let mut order: Vec<usize> = (0..31).collect();
+    order.sort_by(|&a, &b| {
+        space
+            .distance(&q, &states[a])
+            .total_cmp(&space.distance(&q, &states[b]))
+    });
+    let before = space.calls.load(std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(nn.nearest(&space, &q), Some(order[0]));
+    let evaluations = space.calls.load(std::sync::atomic::Ordering::Relaxed) - before;
+    // The f32 lanes pass a few states to the exact distance, not all 31.
+    assert!(
+        evaluations < 8,
+        "{evaluations} distance evaluations among 31 buffered states"
+    );
+    // The nearest state's lane holds the smallest sum; removed, it must not hide the next.
+    nn.remove(order[0]);
+    assert_eq!(nn.nearest(&space, &q), Some(order[1]));
+    nn.remove(order[1]);
+    assert_eq!(nn.k_nearest(&space, &q, 3), order[2..5].to_vec());
+}
