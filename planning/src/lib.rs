@@ -71,6 +71,7 @@ pub mod lazy_prm;
 pub mod motion;
 pub mod nn;
 pub mod obstacles;
+mod pair_lanes;
 pub mod planner;
 pub mod problem;
 pub mod race;

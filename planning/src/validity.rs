@@ -10,6 +10,7 @@ use parry3d::math::{Real, Vector};
 use parry3d::shape::{Ball, SharedShape};
 
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
+use crate::pair_lanes::PairLanes;
 use crate::reach::{Reach, Row};
 use crate::twins::Twins;
 
@@ -478,6 +479,8 @@ struct BroadPhase {
     moving_pairs: Vec<(u32, u32, f64)>,
     /// Per entry of `moving_pairs`: the pair's index.
     moving_pair_index: Vec<u32>,
+    /// `moving_pairs`' bounding-ball tests in f32 lanes, a filter before the exact one.
+    pair_lanes: PairLanes,
     /// Per link: its shape as one box, when it is one (pose in the link frame, half extents),
     /// for the self-collision test of its pairs against the other link's cover.
     boxes: Vec<Option<(Isometry3<f64>, nalgebra::Vector3<f64>)>>,
@@ -592,7 +595,7 @@ impl BroadPhase {
                 s * s
             })
             .collect();
-        let (moving_pairs, moving_pair_index) = pairs
+        let (moving_pairs, moving_pair_index): (Vec<_>, Vec<_>) = pairs
             .iter()
             .enumerate()
             .filter(|&(i, _)| pair_moves[i])
@@ -638,6 +641,7 @@ impl BroadPhase {
             pair_reach2,
             part_range,
             parts,
+            pair_lanes: PairLanes::new(&moving_pairs),
             moving_pairs,
             moving_pair_index,
             boxes,
@@ -1750,17 +1754,25 @@ impl RobotValidity {
                 return true;
             }
         }
-        // The moving pairs' bounding balls in one tight loop (most are apart), the rest of
-        // the pair test only for those within reach: 17 % fewer instructions per Fetch check
-        // than calling the whole test for each of its 70 pairs.
-        for k in 0..self.broad.moving_pairs.len() {
-            let (a, b, reach2) = self.broad.moving_pairs[k];
-            let d2 = (self.broad.world_center[a as usize] - self.broad.world_center[b as usize]).norm_squared();
-            if d2 <= reach2 {
-                let i = self.broad.moving_pair_index[k] as usize;
-                if skip != Hint::Pair(i) && !self.twins.pair(i) && self.pair_blocked_within_reach(i) {
-                    self.broad.hint = Hint::Pair(i);
-                    return true;
+        // The moving pairs' bounding balls first, eight pairs per step (most are apart), the
+        // rest of the pair test only for those within reach. (Pair by pair, the ball test
+        // alone cost about twenty instructions per pair.)
+        let b = &mut self.broad;
+        b.pair_lanes.refresh(&b.world_center);
+        for t in 0..self.broad.pair_lanes.steps() {
+            let mut lanes = self.broad.pair_lanes.step(t);
+            while lanes != 0 {
+                let k = self.broad.pair_lanes.entry(t, lanes.trailing_zeros() as usize);
+                lanes &= lanes - 1;
+                // The lanes' f32 test is widened: the exact one decides.
+                let (a, b, reach2) = self.broad.moving_pairs[k];
+                let d2 = (self.broad.world_center[a as usize] - self.broad.world_center[b as usize]).norm_squared();
+                if d2 <= reach2 {
+                    let i = self.broad.moving_pair_index[k] as usize;
+                    if skip != Hint::Pair(i) && !self.twins.pair(i) && self.pair_blocked_within_reach(i) {
+                        self.broad.hint = Hint::Pair(i);
+                        return true;
+                    }
                 }
             }
         }
