@@ -1,6 +1,7 @@
 //! [`BallBatch`]: up to 64 balls asked about in one call ([`Obstacles::balls_touching`]).
 
 use parry3d::math::{Real, Vector};
+use wide::f32x8;
 
 #[cfg(doc)]
 use super::Obstacles;
@@ -146,6 +147,48 @@ impl BallBatch {
         true
     }
 
+    /// The balls grown by `margin`: which are not finite (bit per ball: a centre coordinate
+    /// or the grown radius is infinite or NaN), and the box around the others (lower and upper
+    /// corner; inverted, `Real::MAX` above `Real::MIN`, when there is none). Eight balls per
+    /// step; the same bits as ball-by-ball `min` and `max`.
+    pub(crate) fn bounds(&self, margin: Real) -> (u64, Vector, Vector) {
+        const LANES: usize = 8;
+        let iota = f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let (low, high) = (f32x8::splat(Real::MAX), f32x8::splat(Real::MIN));
+        let mut lo = [low; 3];
+        let mut hi = [high; 3];
+        let mut bad = 0u64;
+        let lanes =
+            |v: &[Real; Self::CAPACITY], at: usize| f32x8::new(v[at..at + LANES].try_into().expect("eight lanes"));
+        for step in 0..self.len.div_ceil(LANES) {
+            let at = step * LANES;
+            let held = iota.simd_lt(f32x8::splat((self.len - at) as f32));
+            let r = lanes(&self.r, at) + f32x8::splat(margin);
+            let c = [lanes(&self.x, at), lanes(&self.y, at), lanes(&self.z, at)];
+            let finite = c[0].is_finite() & c[1].is_finite() & c[2].is_finite() & r.is_finite();
+            bad |= u64::from((held & !finite).to_bitmask()) << at;
+            let counted = held & finite;
+            for k in 0..3 {
+                lo[k] = lo[k].fast_min(counted.select(c[k] - r, low));
+                hi[k] = hi[k].fast_max(counted.select(c[k] + r, high));
+            }
+        }
+        let fold = |v: f32x8, start: Real, f: fn(Real, Real) -> Real| v.to_array().into_iter().fold(start, f);
+        (
+            bad,
+            Vector::new(
+                fold(lo[0], Real::MAX, Real::min),
+                fold(lo[1], Real::MAX, Real::min),
+                fold(lo[2], Real::MAX, Real::min),
+            ),
+            Vector::new(
+                fold(hi[0], Real::MIN, Real::max),
+                fold(hi[1], Real::MIN, Real::max),
+                fold(hi[2], Real::MIN, Real::max),
+            ),
+        )
+    }
+
     /// How many balls the batch holds.
     ///
     /// ```
@@ -209,6 +252,64 @@ impl BallBatch {
             u64::MAX
         } else {
             (1u64 << self.len) - 1
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_pcg::Pcg64Mcg;
+
+    /// Eight-lane bounds give the bits of a ball-by-ball pass over the finite balls, and mark
+    /// exactly the balls that are not finite.
+    #[test]
+    fn bounds_match_ball_by_ball_min_and_max() {
+        let mut rng = Pcg64Mcg::seed_from_u64(11);
+        let odd = [Real::NAN, Real::INFINITY, Real::NEG_INFINITY];
+        for round in 0..2000 {
+            let mut balls = BallBatch::new();
+            // Stale lanes past the end must not count: fill, clear, refill fewer.
+            for _ in 0..BallBatch::CAPACITY {
+                balls.push(Vector::splat(-1e6), 1e6);
+            }
+            balls.clear();
+            let n = rng.random_range(0..=BallBatch::CAPACITY);
+            for _ in 0..n {
+                let mut v = [0.0 as Real; 4];
+                for x in &mut v {
+                    *x = rng.random_range(-3.0..3.0);
+                    if rng.random_bool(0.01) {
+                        *x = odd[rng.random_range(0..3)];
+                    }
+                }
+                balls.push(Vector::new(v[0], v[1], v[2]), v[3].abs());
+            }
+            let margin = if round % 2 == 0 { 0.0 } else { 0.01 };
+            let (mut bad, mut lo, mut hi) = (0u64, Vector::splat(Real::MAX), Vector::splat(Real::MIN));
+            for j in 0..n {
+                let (c, r) = balls.ball(j);
+                let r = r + margin;
+                if !(c.is_finite() && r.is_finite()) {
+                    bad |= 1 << j;
+                    continue;
+                }
+                lo = lo.min(c - Vector::splat(r));
+                hi = hi.max(c + Vector::splat(r));
+            }
+            let (b, l, h) = balls.bounds(margin);
+            assert_eq!(b, bad, "round {round}");
+            assert_eq!(
+                l.to_array().map(Real::to_bits),
+                lo.to_array().map(Real::to_bits),
+                "round {round}"
+            );
+            assert_eq!(
+                h.to_array().map(Real::to_bits),
+                hi.to_array().map(Real::to_bits),
+                "round {round}"
+            );
         }
     }
 }

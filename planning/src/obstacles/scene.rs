@@ -917,21 +917,9 @@ impl Obstacles for ParryScene {
         }
         let all = balls.mask();
         let n = balls.len();
-        let mut hit = 0u64;
-        for j in 0..n {
-            let (c, r) = balls.ball(j);
-            if !(c.is_finite() && (r + self.margin).is_finite()) {
-                hit |= 1 << j;
-            }
-        }
-        // The batch's bounding box picks the obstacles worth testing lane by lane.
-        let (mut lo, mut hi) = (Vector::splat(Real::MAX), Vector::splat(Real::MIN));
-        for j in 0..n {
-            let (c, r) = balls.ball(j);
-            let r = Vector::splat(r + self.margin);
-            lo = lo.min(c - r);
-            hi = hi.max(c + r);
-        }
+        // A ball that is not finite counts as touching. The others' bounding box picks the
+        // obstacles worth testing lane by lane.
+        let (mut hit, lo, hi) = balls.bounds(self.margin);
         // Eight obstacles' boxes at a time against the batch's box, in index order, until
         // every ball touches something.
         self.boxes.first_overlapping(&Aabb::new(lo, hi), |i| {
