@@ -277,7 +277,7 @@ mod tests {
             balls.clear();
             let n = rng.random_range(0..=BallBatch::CAPACITY);
             for _ in 0..n {
-                let mut v = [0.0 as Real; 4];
+                let mut v: [Real; 4] = [0.0; 4];
                 for x in &mut v {
                     *x = rng.random_range(-3.0..3.0);
                     if rng.random_bool(0.01) {
