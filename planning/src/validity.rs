@@ -445,6 +445,9 @@ struct BroadPhase {
     moving: Vec<usize>,
     /// Scratch batch of balls (reused, no allocation per check).
     batch: BallBatch,
+    /// The bounding balls of the first [`BallBatch::CAPACITY`] links of `moving`, in that
+    /// order, for the current poses (filled with their centres by `update_centers`).
+    moving_batch: BallBatch,
     /// Per link: inflated bounding radius (0 for links without geometry).
     radius: Vec<f64>,
     /// Per geometric link (same order as `RobotValidity::geometric`): the bounding ball.
@@ -635,6 +638,7 @@ impl BroadPhase {
             part_cover,
             moving: (0..geometric.len()).filter(|&i| link_moves[i]).collect(),
             batch: BallBatch::new(),
+            moving_batch: BallBatch::new(),
             local_center,
             radius,
             balls,
@@ -1435,12 +1439,18 @@ impl RobotValidity {
     /// current poses. The other links' centres (the Fetch's base, wheels, casters and fixed
     /// torso parts: 10 of its 25 links) change only with a full forward kinematics pass,
     /// which sets them ([`RobotValidity::update_poses`]).
+    /// The first [`BallBatch::CAPACITY`] of them also go to `moving_batch`, as balls.
     fn update_centers(&mut self) {
         let b = &mut self.broad;
         b.epoch = b.epoch.wrapping_add(1);
-        for &i in &b.moving {
+        b.moving_batch.clear();
+        for (k, &i) in b.moving.iter().enumerate() {
             let l = self.geometric[i];
-            b.world_center[l] = self.poses[l] * b.local_center[l];
+            let c = self.poses[l] * b.local_center[l];
+            b.world_center[l] = c;
+            if k < BallBatch::CAPACITY {
+                b.moving_batch.push(to_vector(&c), b.balls[i].radius);
+            }
         }
     }
 
@@ -1730,14 +1740,7 @@ impl RobotValidity {
         // boards or cage bars) collide most often, so a colliding state is settled sooner
         // (1–4 % on the MotionBenchMaker cage and wedged Fetch plans; the answers are the same
         // in any order).
-        let b = &mut self.broad;
-        b.batch.clear();
-        for &i in b.moving.iter().take(BallBatch::CAPACITY) {
-            let l = self.geometric[i];
-            let c = b.world_center[l];
-            b.batch.push(to_vector(&c), b.balls[i].radius);
-        }
-        let mut near = self.obstacles.balls_touching(&self.broad.batch);
+        let mut near = self.obstacles.balls_touching(&self.broad.moving_batch);
         while near != 0 {
             let bit = 63 - near.leading_zeros() as usize;
             let i = self.broad.moving[bit];
