@@ -924,7 +924,7 @@ impl KdTree {
     fn search<S: Space, C: Collector>(&self, space: &S, index: &NearestNeighbors, q: &[f64], c: &mut C) {
         if self.wraps.is_empty() {
             if self.scanned(|| self.far::<false>(q)) {
-                return self.scan::<S, C, false>(space, index, q, q, c);
+                return self.lane_view().scan::<S, C, false>(space, index, q, q, c);
             }
             let mut search = KdSearch {
                 tree: self,
@@ -942,7 +942,7 @@ impl KdTree {
             }
             let wrapped = &wrapped[..q.len()];
             if self.scanned(|| self.far::<true>(wrapped)) {
-                return self.scan::<S, C, true>(space, index, q, wrapped, c);
+                return self.lane_view().scan::<S, C, true>(space, index, q, wrapped, c);
             }
             let mut search = KdSearch {
                 tree: self,
@@ -972,16 +972,9 @@ impl KdTree {
         4.0 * self.box_distance2::<WRAP>(0, wrapped) >= self.diagonal2
     }
 
-    /// [`KdTree::search`] of a tree with `lanes` ([`LaneView::scan`]).
+    /// The tree's `lanes`, for [`KdTree::search`] by [`LaneView::scan`].
     #[inline]
-    fn scan<S: Space, C: Collector, const WRAP: bool>(
-        &self,
-        space: &S,
-        index: &NearestNeighbors,
-        q: &[f64],
-        wrapped: &[f64],
-        c: &mut C,
-    ) {
+    fn lane_view(&self) -> LaneView<'_> {
         LaneView {
             lanes: &self.lanes,
             ids: &self.ids,
@@ -989,7 +982,6 @@ impl KdTree {
             lane_periods: &self.lane_periods,
             reach: self.reach,
         }
-        .scan::<S, C, WRAP>(space, index, q, wrapped, c);
     }
 }
 
