@@ -274,14 +274,7 @@ impl NearestNeighbors {
         // Drop removed states while rebuilding.
         ids.retain(|&i| !self.removed[i as usize]);
         if !ids.is_empty() {
-            let kd = space
-                .euclidean_weights()
-                .map(|w| (w, None))
-                .or_else(|| space.wrapping_weights().map(|(w, wraps)| (w, Some(wraps))))
-                .filter(|(w, wraps)| {
-                    self.dim <= KD_MAX_DIM && w.len() == self.dim && wraps.is_none_or(|x| x.len() == self.dim)
-                });
-            let tree = match kd {
+            let tree = match weighted_metric(space, self.dim) {
                 Some((w, wraps)) => Tree::Kd(KdTree::build(&self.states, self.dim, w, wraps, ids)),
                 None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids)),
             };
@@ -319,10 +312,7 @@ impl NearestNeighbors {
             if lanes.wraps.is_empty() {
                 view.scan::<S, C, false>(space, self, q, q, c);
             } else {
-                let mut wrapped = [0.0f64; KD_MAX_DIM];
-                for ((w, &x), &wraps) in wrapped.iter_mut().zip(q).zip(&lanes.wraps) {
-                    *w = if wraps { wrap_angle(x) } else { x };
-                }
+                let wrapped = wrap_query(q, &lanes.wraps);
                 view.scan::<S, C, true>(space, self, q, &wrapped[..q.len()], c);
             }
         } else {
@@ -936,10 +926,7 @@ impl KdTree {
             search.visit::<C, false>(0, 0.0, self.box_distance2::<false>(0, q), &mut [0.0; KD_MAX_DIM], c);
         } else {
             // The query with its angles wrapped like the tree's copies of the states.
-            let mut wrapped = [0.0f64; KD_MAX_DIM];
-            for ((w, &x), &wraps) in wrapped.iter_mut().zip(q).zip(&self.wraps) {
-                *w = if wraps { wrap_angle(x) } else { x };
-            }
+            let wrapped = wrap_query(q, &self.wraps);
             let wrapped = &wrapped[..q.len()];
             if self.scanned(|| self.far::<true>(wrapped)) {
                 return self.lane_view().scan::<S, C, true>(space, index, q, wrapped, c);
@@ -1087,6 +1074,27 @@ impl LaneView<'_> {
     }
 }
 
+/// The space's weighted metric, when an index of `dim`-dimensional states can use it for k-d
+/// trees and lanes: its weights, and which coordinates are angles when some may be.
+fn weighted_metric<S: Space>(space: &S, dim: usize) -> Option<(&[f64], Option<&[bool]>)> {
+    space
+        .euclidean_weights()
+        .map(|w| (w, None))
+        .or_else(|| space.wrapping_weights().map(|(w, wraps)| (w, Some(wraps))))
+        .filter(|(w, wraps)| dim <= KD_MAX_DIM && w.len() == dim && wraps.is_none_or(|x| x.len() == dim))
+}
+
+/// `q` with the coordinates that `wraps` marks wrapped into `(−π, π]` (the first `q.len()`
+/// entries).
+#[inline(always)]
+fn wrap_query(q: &[f64], wraps: &[bool]) -> [f64; KD_MAX_DIM] {
+    let mut wrapped = [0.0f64; KD_MAX_DIM];
+    for ((w, &x), &wraps) in wrapped.iter_mut().zip(q).zip(wraps) {
+        *w = if wraps { wrap_angle(x) } else { x };
+    }
+    wrapped
+}
+
 /// The linear buffer's states as lanes ([`LaneView`]), written by the queries, which know the
 /// space's weights.
 #[derive(Clone, Debug, Default)]
@@ -1115,12 +1123,7 @@ impl BufferLanes {
         self.lane_periods.clear();
         self.reach = 0.0;
         self.usable = false;
-        let metric = space
-            .euclidean_weights()
-            .map(|w| (w, None))
-            .or_else(|| space.wrapping_weights().map(|(w, wraps)| (w, Some(wraps))))
-            .filter(|(w, wraps)| dim <= KD_MAX_DIM && w.len() == dim && wraps.is_none_or(|x| x.len() == dim));
-        let Some((weights, wraps)) = metric else {
+        let Some((weights, wraps)) = weighted_metric(space, dim) else {
             return;
         };
         self.weights.extend_from_slice(weights);

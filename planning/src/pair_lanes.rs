@@ -6,8 +6,9 @@
 //! instructions (two indexed centres, their distance, a branch). Here each pair is a lane: the
 //! pairs are grouped by one of their links (the *row*: chosen greedily so that few steps hold
 //! them all, 16 for the Fetch's 70), the other links' centres sit in f32 lanes, and one step
-//! measures a row's centre against eight of them. The f32 test is a filter widened well past its rounding; the caller confirms each
-//! passing pair with the exact f64 test, so the answers are those of the pair-by-pair loop.
+//! measures a row's centre against eight of them. The f32 test is a filter widened well past
+//! its rounding; the caller confirms each passing pair with the exact f64 test, so the answers
+//! are those of the pair-by-pair loop.
 
 use nalgebra::Point3;
 use wide::f32x8;

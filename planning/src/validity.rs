@@ -1438,8 +1438,8 @@ impl RobotValidity {
     /// World centres of the bounding spheres of the links that move with the chain, for the
     /// current poses. The other links' centres (the Fetch's base, wheels, casters and fixed
     /// torso parts: 10 of its 25 links) change only with a full forward kinematics pass,
-    /// which sets them ([`RobotValidity::update_poses`]).
-    /// The first [`BallBatch::CAPACITY`] of them also go to `moving_batch`, as balls.
+    /// which sets them ([`RobotValidity::update_poses`]). The first [`BallBatch::CAPACITY`]
+    /// moving links' bounding balls go to `moving_batch` on the way.
     fn update_centers(&mut self) {
         let b = &mut self.broad;
         b.epoch = b.epoch.wrapping_add(1);

@@ -174,18 +174,12 @@ impl BallBatch {
             }
         }
         let fold = |v: f32x8, start: Real, f: fn(Real, Real) -> Real| v.to_array().into_iter().fold(start, f);
+        let least = |k: usize| fold(lo[k], Real::MAX, Real::min);
+        let most = |k: usize| fold(hi[k], Real::MIN, Real::max);
         (
             bad,
-            Vector::new(
-                fold(lo[0], Real::MAX, Real::min),
-                fold(lo[1], Real::MAX, Real::min),
-                fold(lo[2], Real::MAX, Real::min),
-            ),
-            Vector::new(
-                fold(hi[0], Real::MIN, Real::max),
-                fold(hi[1], Real::MIN, Real::max),
-                fold(hi[2], Real::MIN, Real::max),
-            ),
+            Vector::new(least(0), least(1), least(2)),
+            Vector::new(most(0), most(1), most(2)),
         )
     }
 
