@@ -363,6 +363,15 @@ mod tests {
             .map_or(0.0, |c| (-c.dist).max(0.0))
     }
 
+    /// The signed distance parry's contact query reports (negative when overlapping), looking
+    /// up to 1 cm apart; infinite beyond.
+    fn parry_contact_distance(a: &Convex, b: &Convex) -> f32 {
+        let ((sa, pa), (sb, pb)) = (parry_shape(a), parry_shape(b));
+        parry3d::query::contact(&pa, sa.as_ref(), &pb, sb.as_ref(), 0.01)
+            .unwrap()
+            .map_or(f32::INFINITY, |c| c.dist)
+    }
+
     /// The parry shape and pose of `s`.
     fn parry_shape(s: &Convex) -> (Box<dyn parry3d::shape::Shape>, parry3d::math::Pose) {
         use parry3d::math::{Pose, Rotation, Vector};
@@ -505,6 +514,41 @@ mod tests {
         assert_eq!(touch(&b, &a), Some(false));
     }
 
+    /// A thin rod 2.4 mm beside a long box: a separating plane shows the gap (the box's
+    /// farthest point along it −0.10528, the rod's nearest −0.10291), and parry's contact
+    /// query measures 2.3 mm, but parry's distance query calls the two touching. The search
+    /// finds them apart both ways round. (The property test below sets such pairs aside:
+    /// parry disagrees with itself there.)
+    #[test]
+    fn a_rod_beside_a_box_is_apart_where_parrys_distance_says_touching() {
+        let a = shape(
+            true,
+            V::new(-0.29205482797856797, -0.0551462316605587, -0.2104450665486572),
+            rotation(
+                [0.05743025347379196, -0.12931100809740476, -0.2064084727646512],
+                -0.500564804472953,
+            ),
+            0.07221259732538152,
+            0.015151300474150314,
+            0.2431521951115654,
+        );
+        let b = shape(
+            false,
+            V::new(-0.01935255387093831, -0.05915222990057486, 0.16575927697795925),
+            rotation(
+                [0.7920670731433355, 0.5941383752318009, 0.3724927806763808],
+                2.701675838101376,
+            ),
+            0.22358129541594163,
+            0.02250989939328075,
+            0.005,
+        );
+        assert_eq!(parry_distance(&a, &b), 0.0);
+        assert!((parry_contact_distance(&a, &b) - 0.0023).abs() < 1e-4);
+        assert_eq!(touch(&a, &b), Some(false));
+        assert_eq!(touch(&b, &a), Some(false));
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(4000))]
 
@@ -522,6 +566,10 @@ mod tests {
             let a = shape(ka, V::from(ca), rotation(ra, aa), da[0], da[1], da[2]);
             let b = shape(kb, V::from(cb), rotation(rb, ab), db[0], db[1], db[2]);
             let d = parry_distance(&a, &b);
+            // Where parry's distance and its contact query disagree by more than a millimetre
+            // about whether the shapes touch, parry is no reference (see the rod test above).
+            let contact = parry_contact_distance(&a, &b);
+            prop_assume!(!(d <= 0.0 && contact > 1e-3) && !(d > 1e-3 && contact <= 0.0));
             let ours = touch(&a, &b);
             let other = touch(&b, &a);
             prop_assert!(ours.is_none() || other.is_none() || ours == other, "{:?} one way, {:?} the other", ours, other);
