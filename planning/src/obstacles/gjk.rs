@@ -20,6 +20,10 @@ type V = Vector3<f64>;
 /// above `f64` rounding at the size of robots and furniture, and about the `f32` rounding of
 /// the poses the shapes come from.
 const SEPARATION: f64 = 1e-7;
+/// Distance (m) of the simplex from the origin within which a direction that fails to
+/// separate the shapes by [`SEPARATION`] ends the search (`None`): they are that close to
+/// touching.
+const NEAR_CONTACT: f64 = 1e-5;
 /// Steps after which the search gives up (`None`). Boxes and cylinders settle in a handful.
 const MAX_ITERATIONS: usize = 48;
 /// Steps reduced by the quick region tests of [`evolve`]; the rest by [`nearest_feature`].
@@ -132,7 +136,11 @@ pub(crate) fn touch(a: &Convex, b: &Convex) -> Option<bool> {
         if reach < -SEPARATION {
             return Some(false);
         }
-        if reach < SEPARATION {
+        // No plane through the origin along `d` separates them. With the simplex's nearest
+        // point within `NEAR_CONTACT` of the origin the shapes are that close to touching, which
+        // is left to the caller; farther, this direction only failed to separate them (a box
+        // 1.9 mm from a flat cylinder met such a direction with the simplex 27 mm away).
+        if reach < SEPARATION && len <= NEAR_CONTACT {
             return None;
         }
         // The newest point first.
@@ -545,6 +553,38 @@ mod tests {
         );
         assert_eq!(parry_distance(&a, &b), 0.0);
         assert!((parry_contact_distance(&a, &b) - 0.0023).abs() < 1e-4);
+        assert_eq!(touch(&a, &b), Some(false));
+        assert_eq!(touch(&b, &a), Some(false));
+    }
+
+    /// A flat cylinder 1.9 mm from a box (parry's distance and contact queries agree). One way
+    /// round, the search met a direction along which the difference reaches the origin's
+    /// plane while its simplex was still 27 mm away, and gave up; it now searches on.
+    #[test]
+    fn a_direction_that_fails_to_separate_far_from_contact_does_not_end_the_search() {
+        let a = shape(
+            false,
+            V::new(0.12653560690143134, 0.10034154125407911, 0.24153363725010607),
+            rotation(
+                [0.4023364421630917, 0.09209927124986128, 0.9635031033653064],
+                2.3322922537883666,
+            ),
+            0.20546101847772474,
+            0.15101200359886097,
+            0.005,
+        );
+        let b = shape(
+            true,
+            V::new(0.25526687466334663, -0.07642842226491763, 0.03626481925461293),
+            rotation(
+                [-0.3127273227930586, -0.6990231262566216, -0.4274916552648053],
+                -0.3008969180341953,
+            ),
+            0.16455787558584334,
+            0.08130079142118658,
+            0.059472206009534234,
+        );
+        assert!((parry_distance(&a, &b) - 0.0019).abs() < 1e-4);
         assert_eq!(touch(&a, &b), Some(false));
         assert_eq!(touch(&b, &a), Some(false));
     }
