@@ -2,7 +2,9 @@
 //!
 //! The model's links are sorted parents-first, so one pass over [`FkOp`]s fills every link pose.
 //! Each op stores its joint origin and axis by value; evaluating it is one `sin_cos`, two
-//! quaternion products and one rotated vector. Nothing allocates.
+//! quaternion products and one rotated vector. A subset of the links
+//! ([`RobotModel::fk_update`]) computes its revolute joints' sines and cosines four at a time
+//! before it composes the ops. Nothing allocates.
 
 use std::ops::{Add, Mul, Sub};
 
@@ -87,7 +89,7 @@ impl FkOp {
     /// coordinates, so 8 products replace the 8 of `local_at` and the 16 of the quaternion
     /// product.
     #[inline(always)]
-    fn after<L: Lanes>(&self, parent: &PoseLanes<L>, v: L, sin_cos: impl Fn(L) -> (L, L)) -> PoseLanes<L> {
+    fn after<L: Lanes>(&self, parent: &PoseLanes<L>, v: L, sin_cos: impl FnOnce(L) -> (L, L)) -> PoseLanes<L> {
         let Motion::RevoluteAxis {
             axis,
             multiplier,
@@ -122,7 +124,7 @@ impl FkOp {
     /// The child's pose relative to its parent for joint value `v` (ignored by fixed joints),
     /// one lane per configuration. `sin_cos` evaluates the half angle of a revolute joint.
     #[inline(always)]
-    fn local_at<L: Lanes>(&self, v: L, sin_cos: impl Fn(L) -> (L, L)) -> PoseLanes<L> {
+    fn local_at<L: Lanes>(&self, v: L, sin_cos: impl FnOnce(L) -> (L, L)) -> PoseLanes<L> {
         let origin = PoseLanes::<L>::splat(&self.origin);
         match self.motion {
             Motion::Fixed => origin,
@@ -313,8 +315,8 @@ fn rotate<L: Lanes>(q: &[L; 4], v: &[L; 3]) -> [L; 3] {
     ]
 }
 
-/// [`sin_cos`] of four values: the same reduction and polynomials per lane (so the same bits),
-/// with libm for lanes outside its range.
+/// [`sin_cos`] of four values: the same reduction and polynomials per lane, and the quadrant
+/// placed with lane masks (so the same bits), with libm for lanes outside its range.
 #[inline(always)]
 fn sin_cos4(x: f64x4) -> (f64x4, f64x4) {
     let xs = x.to_array();
@@ -323,13 +325,68 @@ fn sin_cos4(x: f64x4) -> (f64x4, f64x4) {
         return (f64x4::new(sc.map(|p| p.0)), f64x4::new(sc.map(|p| p.1)));
     }
     let (k, s, c) = sin_cos_reduced(x);
-    let (k, s, c) = (k.to_array(), s.to_array(), c.to_array());
-    let mut so = [0.0; 4];
-    let mut co = [0.0; 4];
-    for i in 0..4 {
-        (so[i], co[i]) = quadrant(k[i], s[i], c[i]);
+    quadrant4(k, s, c)
+}
+
+/// [`quadrant`] in four lanes: `k` mod 4 as a float (`k − 4·⌊k/4⌋`, exact for the quadrants
+/// of |x| < 1e5), then a lane select for the swap and a sign-bit flip for each output.
+#[inline(always)]
+fn quadrant4(k: f64x4, s: f64x4, c: f64x4) -> (f64x4, f64x4) {
+    let m = k - (k * f64x4::splat(0.25)).floor() * f64x4::splat(4.0);
+    let (one, two, three) = (f64x4::splat(1.0), f64x4::splat(2.0), f64x4::splat(3.0));
+    let swap = m.simd_eq(one) | m.simd_eq(three);
+    let sign = f64x4::splat(-0.0);
+    let flip_first = m.simd_ge(two) & sign;
+    let flip_second = (m.simd_eq(one) | m.simd_eq(two)) & sign;
+    (swap.select(c, s) ^ flip_first, swap.select(s, c) ^ flip_second)
+}
+
+/// The revolute joints of a subset's ops in evaluation order, four to a chunk, so that one
+/// pass computes their sines and cosines four at a time before the ops are composed. A short
+/// last chunk repeats its first variable with a zero angle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct TurnChunk {
+    vars: [u32; 4],
+    multiplier: [f64; 4],
+    offset: [f64; 4],
+}
+
+/// Chunks of [`TurnChunk`] computed ahead; a subset with more revolute joints computes each
+/// one as its op comes.
+const TURN_CHUNKS: usize = 4;
+
+/// Fills `turns` with the chunks of `ops`' revolute joints (it is cleared first).
+fn fill_turns<'a>(ops: impl Iterator<Item = &'a FkOp>, turns: &mut Vec<TurnChunk>) {
+    turns.clear();
+    let mut lane = 0;
+    for op in ops {
+        let (var, multiplier, offset) = match op.motion {
+            Motion::RevoluteAxis {
+                var,
+                multiplier,
+                offset,
+                ..
+            }
+            | Motion::Revolute {
+                var,
+                multiplier,
+                offset,
+                ..
+            } => (var, multiplier, offset),
+            Motion::Fixed | Motion::Prismatic { .. } => continue,
+        };
+        if lane == 0 {
+            turns.push(TurnChunk {
+                vars: [var; 4],
+                ..TurnChunk::default()
+            });
+        }
+        let chunk = turns.last_mut().expect("pushed above");
+        chunk.vars[lane] = var;
+        chunk.multiplier[lane] = multiplier;
+        chunk.offset[lane] = offset;
+        lane = (lane + 1) % 4;
     }
-    (f64x4::new(so), f64x4::new(co))
 }
 
 /// The compiled forward-kinematics program of a model: `ops[i]` computes link `i + 1`.
@@ -342,31 +399,59 @@ impl FkProgram {
     /// Runs every op: `poses[0]` must hold the root pose.
     #[inline]
     pub(crate) fn run(&self, q: &[f64], poses: &mut [Isometry3<f64>]) {
-        Self::eval(self.ops.iter(), q, poses);
+        Self::eval(self.ops.iter(), &[], q, poses);
     }
 
     /// Runs only the ops listed (each op's parent must already be computed).
     #[inline]
     pub(crate) fn run_subset(&self, subset: &[u32], q: &[f64], poses: &mut [Isometry3<f64>]) {
-        Self::eval(subset.iter().map(|&i| &self.ops[i as usize]), q, poses);
+        Self::eval(subset.iter().map(|&i| &self.ops[i as usize]), &[], q, poses);
     }
 
     /// Runs `subset`'s ops, its held copies when it has them.
     #[inline]
     fn run_fk_subset(&self, subset: &FkSubset, q: &[f64], poses: &mut [Isometry3<f64>]) {
         if subset.held.is_empty() {
-            self.run_subset(&subset.ops, q, poses);
+            let ops = subset.ops.iter().map(|&i| &self.ops[i as usize]);
+            Self::eval(ops, &subset.turns, q, poses);
         } else {
-            Self::eval(subset.held.iter(), q, poses);
+            Self::eval(subset.held.iter(), &subset.turns, q, poses);
         }
     }
 
-    /// Evaluates `ops` in order. Serial chains dominate: the last pose stays in registers
-    /// instead of being reloaded when the next op hangs from it.
+    /// Evaluates `ops` in order. `turns` are their revolute joints ([`fill_turns`]), whose
+    /// sines and cosines are then computed four at a time before the ops are composed (with
+    /// the same bits as one at a time); empty or too many, each op computes its own.
     #[inline(always)]
-    fn eval<'a>(ops: impl Iterator<Item = &'a FkOp>, q: &[f64], poses: &mut [Isometry3<f64>]) {
+    fn eval<'a>(ops: impl Iterator<Item = &'a FkOp>, turns: &[TurnChunk], q: &[f64], poses: &mut [Isometry3<f64>]) {
+        if turns.is_empty() || turns.len() > TURN_CHUNKS {
+            return Self::compose(ops, q, poses, |_, half| sin_cos(half));
+        }
+        let mut sines = [0.0; 4 * TURN_CHUNKS];
+        let mut cosines = [0.0; 4 * TURN_CHUNKS];
+        for (k, t) in turns.iter().enumerate() {
+            let v = f64x4::new(t.vars.map(|v| q[v as usize]));
+            let half = f64x4::splat(0.5) * (f64x4::new(t.multiplier) * v + f64x4::new(t.offset));
+            let (s, c) = sin_cos4(half);
+            sines[4 * k..4 * k + 4].copy_from_slice(&s.to_array());
+            cosines[4 * k..4 * k + 4].copy_from_slice(&c.to_array());
+        }
+        Self::compose(ops, q, poses, |turn, _| (sines[turn], cosines[turn]))
+    }
+
+    /// Composes `ops` in order; `sin_cos(turn, half)` gives the sine and cosine of the half
+    /// angle `half` of the `turn`-th revolute joint among them. Serial chains dominate: the
+    /// last pose stays in registers instead of being reloaded when the next op hangs from it.
+    #[inline(always)]
+    fn compose<'a>(
+        ops: impl Iterator<Item = &'a FkOp>,
+        q: &[f64],
+        poses: &mut [Isometry3<f64>],
+        sin_cos: impl Fn(usize, f64) -> (f64, f64),
+    ) {
         let mut prev_child = 0u32;
         let mut prev = PoseLanes::<f64>::splat(&poses[0]);
+        let mut turn = 0;
         for op in ops {
             let parent = if op.parent == prev_child {
                 prev
@@ -374,7 +459,10 @@ impl FkProgram {
                 PoseLanes::splat(&poses[op.parent as usize])
             };
             let v = op.var().map_or(0.0, |v| q[v]);
-            let pose = op.after(&parent, v, sin_cos);
+            let pose = op.after(&parent, v, |half| {
+                turn += 1;
+                sin_cos(turn - 1, half)
+            });
             poses[op.child as usize] = pose.to_isometry();
             prev = pose;
             prev_child = op.child;
@@ -434,6 +522,8 @@ pub struct FkSubset {
     /// When not empty, evaluated instead of `ops`: copies of them in which the joints held at
     /// a configuration are fixed joints ([`RobotModel::fk_subset_hold`]).
     held: Vec<FkOp>,
+    /// The revolute joints of the ops evaluated (`held` when not empty, else `ops`).
+    turns: Vec<TurnChunk>,
 }
 
 impl FkSubset {
@@ -488,14 +578,18 @@ impl RobotModel {
     /// assert!(!after_l4.contains(panda.link_index("panda_link3").unwrap()));
     /// ```
     pub fn fk_subset(&self, mut select: impl FnMut(usize) -> bool) -> FkSubset {
-        FkSubset {
+        let mut subset = FkSubset {
             ops: (1..self.0.links.len())
                 .filter(|&l| select(l))
                 .map(|l| (l - 1) as u32)
                 .collect(),
             links: self.0.links.len(),
             held: Vec::new(),
-        }
+            turns: Vec::new(),
+        };
+        let ops = &self.0.fk.ops;
+        fill_turns(subset.ops.iter().map(|&i| &ops[i as usize]), &mut subset.turns);
+        subset
     }
 
     /// Holds every joint of `subset` whose configuration variable `varies` rejects at its value
@@ -530,9 +624,12 @@ impl RobotModel {
     /// ```
     pub fn fk_subset_hold(&self, subset: &mut FkSubset, q: &[f64], varies: impl Fn(usize) -> bool) -> Result<()> {
         subset.held.clear();
-        self.check_configuration(q)?;
+        // Without turns each op computes its own sine and cosine, right for any ops.
+        subset.turns.clear();
         self.check_link_counts([("link subset's model", subset.links)])?;
         let ops = &self.0.fk.ops;
+        fill_turns(subset.ops.iter().map(|&i| &ops[i as usize]), &mut subset.turns);
+        self.check_configuration(q)?;
         subset.held.extend(subset.ops.iter().map(|&i| {
             let op = ops[i as usize];
             match op.var() {
@@ -544,6 +641,7 @@ impl RobotModel {
                 _ => op,
             }
         }));
+        fill_turns(subset.held.iter(), &mut subset.turns);
         Ok(())
     }
 
@@ -854,6 +952,17 @@ mod tests {
                     (expected.0.to_bits(), expected.1.to_bits()),
                     "k = {k}, s = {s}, c = {c}"
                 );
+                // The four-lane selection, with the other lanes on other quadrants.
+                let ks = wide::f64x4::new([k as f64, (k + 1) as f64, (k - 2) as f64, (k * 3) as f64]);
+                let (s4, c4) = super::quadrant4(ks, wide::f64x4::splat(s), wide::f64x4::splat(c));
+                for (lane, kk) in ks.to_array().into_iter().enumerate() {
+                    let one = super::quadrant(kk, s, c);
+                    assert_eq!(
+                        (s4.to_array()[lane].to_bits(), c4.to_array()[lane].to_bits()),
+                        (one.0.to_bits(), one.1.to_bits()),
+                        "k = {kk}, s = {s}, c = {c}"
+                    );
+                }
             }
         }
     }

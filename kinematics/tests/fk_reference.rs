@@ -290,7 +290,7 @@ fn four_lanes_equal_one_at_a_time() {
             model.fk_subset(|l| l >= n / 3 && model.joints_to(l).len() > 1),
         ];
         let root = Isometry3::new(Vector3::new(0.3, -0.2, 0.1), Vector3::new(0.0, 0.0, 0.7));
-        for subset in &subsets {
+        for (which, subset) in subsets.iter().enumerate() {
             for round in 0..50 {
                 let qs: Vec<Vec<f64>> = (0..4)
                     .map(|_| {
@@ -309,8 +309,31 @@ fn four_lanes_equal_one_at_a_time() {
                     let mut one = base.clone();
                     model.fk_update(subset, lane_q[k], &mut one).unwrap();
                     assert_eq!(one, four[k], "{name}, lane {k}");
+                    // A subset's joint sines and cosines come four at a time; a full pass
+                    // computes each as its joint comes: the same bits (for the whole model:
+                    // the other subset's links hang from poses of the first lane).
+                    if which == 0 {
+                        let mut full = model.pose_buffer();
+                        model.fk_from(&root, lane_q[k], &mut full).unwrap();
+                        assert_eq!(one, full, "{name}, lane {k}");
+                    }
                 }
             }
+        }
+        // Continuous joints far from zero, their half angles in every quadrant and past the
+        // inlined sine's range (where it hands the angle to libm): still the bits of a full
+        // pass.
+        for angle in [5.0, -5.0, 8.0, -11.0, 3.0e5] {
+            let mut far = vec![0.0; model.dof()];
+            model.random_configuration(&mut rng, &mut far);
+            for v in (0..model.dof()).filter(|&v| model.upper()[v].is_infinite()) {
+                far[v] = angle + 0.1 * v as f64;
+            }
+            let (mut one, mut full) = (model.pose_buffer(), model.pose_buffer());
+            model.fk(&far, &mut one).unwrap();
+            model.fk_update(&subsets[0], &far, &mut one).unwrap();
+            model.fk(&far, &mut full).unwrap();
+            assert_eq!(one, full, "{name}: continuous joints at {angle}");
         }
         let bad = vec![f64::NAN; model.dof()];
         let ok = vec![0.0; model.dof()];
