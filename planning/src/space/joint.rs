@@ -34,6 +34,9 @@ pub struct JointSpace {
     continuous: Vec<bool>,
     /// Whether any joint is continuous (distances of all-bounded spaces skip the wrap test).
     any_continuous: bool,
+    /// `continuous` four coordinates to an entry, 1.0 where continuous (the lane masks of
+    /// [`squared_differences4`]).
+    wrap_lanes: Vec<[f64; 4]>,
     weights: Vec<f64>,
     velocity_limits: Vec<f64>,
 }
@@ -116,6 +119,16 @@ impl JointSpace {
             upper: hi,
             continuous: continuous.to_vec(),
             any_continuous: continuous.contains(&true),
+            wrap_lanes: continuous
+                .chunks_exact(4)
+                .map(|c| {
+                    c.iter()
+                        .map(|&c| f64::from(u8::from(c)))
+                        .collect::<Vec<_>>()
+                        .try_into()
+                        .expect("four")
+                })
+                .collect(),
             weights: vec![1.0; n],
             velocity_limits: vec![f64::INFINITY; n],
         })
@@ -277,7 +290,19 @@ impl Space for JointSpace {
         let mut sum = 0.0;
         if self.any_continuous {
             let c = &self.continuous[..n];
-            for i in 0..n {
+            // Four coordinates at a time: the differences, wrapped where continuous, weighted
+            // and squared in lanes (the same operations as one at a time, so the same bits),
+            // then summed in coordinate order.
+            let mut i = 0;
+            while i + 4 <= n {
+                let wrap = &self.wrap_lanes[i / 4];
+                let squares = squared_differences4(&a[i..i + 4], &b[i..i + 4], &w[i..i + 4], wrap);
+                for q in squares {
+                    sum += q;
+                }
+                i += 4;
+            }
+            for i in i..n {
                 let d = w[i] * coordinate_difference(c[i], a[i], b[i]);
                 sum += d * d;
             }
@@ -355,4 +380,30 @@ impl Space for JointSpace {
     fn wrapping_weights(&self) -> Option<(&[f64], &[bool])> {
         Some((&self.weights, &self.continuous))
     }
+}
+
+/// `(w·(b − a))²` for four coordinates, the difference wrapped into `(-π, π]` in the lanes
+/// where `wrap` is 1, bit for bit as [`coordinate_difference`] one at a time: differences of
+/// wrapped angles are within a turn of that range, which lane selects settle; anything else
+/// (a NaN, an angle given unwrapped) goes one at a time.
+#[inline(always)]
+fn squared_differences4(a: &[f64], b: &[f64], w: &[f64], wrap: &[f64; 4]) -> [f64; 4] {
+    use std::f64::consts::{PI, TAU};
+    use wide::f64x4;
+    let lanes = |v: &[f64]| f64x4::new([v[0], v[1], v[2], v[3]]);
+    let x = lanes(b) - lanes(a);
+    let wraps = f64x4::new(*wrap).simd_eq(f64x4::splat(1.0));
+    let (pi, tau) = (f64x4::splat(PI), f64x4::splat(TAU));
+    let inside = x.simd_gt(-pi) & x.simd_le(pi);
+    let above = x.simd_gt(pi) & x.simd_lt(tau);
+    let below = x.simd_gt(-tau) & x.simd_le(-pi);
+    if (inside | above | below | !wraps).to_bitmask() != 0b1111 {
+        return std::array::from_fn(|k| {
+            let d = w[k] * coordinate_difference(wrap[k] == 1.0, a[k], b[k]);
+            d * d
+        });
+    }
+    let wrapped = above.select(x - tau, below.select(x + tau, x));
+    let d = lanes(w) * wraps.select(wrapped, x);
+    (d * d).to_array()
 }
