@@ -481,6 +481,20 @@ mod tests {
         }
     }
 
+    /// A shape of a recorded case, in the property test's terms: a box (`true`) or a
+    /// cylinder, its centre, the axis and angle of its rotation, and the three dimensions
+    /// [`shape`] takes.
+    fn case(kind: bool, c: [f64; 3], axis: [f64; 3], angle: f64, d: [f64; 3]) -> Convex {
+        shape(kind, V::from(c), rotation(axis, angle), d[0], d[1], d[2])
+    }
+
+    /// The search's answer, asserted to be the same both ways round.
+    fn touch_both(a: &Convex, b: &Convex) -> Option<bool> {
+        let ab = touch(a, b);
+        assert_eq!(ab, touch(b, a), "the answer depends on the order");
+        ab
+    }
+
     #[test]
     fn plain_cases() {
         let id = Rotation3::identity();
@@ -546,31 +560,22 @@ mod tests {
     /// the same four simplices: the exact reduction after them finds the gap, both ways round.
     #[test]
     fn boxes_that_cycle_the_quick_steps_are_found_apart() {
-        let a = shape(
+        let a = case(
             true,
-            V::new(0.2335184443914514, 0.044671568462213956, -0.021975402340657944),
-            rotation(
-                [-0.34504790876118663, -0.6858111939455243, -0.24472981259952453],
-                -3.178601409589722,
-            ),
-            0.059243336182449466,
-            0.15064482497703532,
-            0.10087402264150984,
+            [0.2335184443914514, 0.044671568462213956, -0.021975402340657944],
+            [-0.34504790876118663, -0.6858111939455243, -0.24472981259952453],
+            -3.178601409589722,
+            [0.059243336182449466, 0.15064482497703532, 0.10087402264150984],
         );
-        let b = shape(
+        let b = case(
             true,
-            V::new(-0.10312605338813129, 0.09629715138315685, -0.2180019583973017),
-            rotation(
-                [0.41542853534829305, 0.48824158947494756, -0.7936531007957252],
-                1.1798130305286763,
-            ),
-            0.047335543645589895,
-            0.14871583386850523,
-            0.17065349716255868,
+            [-0.10312605338813129, 0.09629715138315685, -0.2180019583973017],
+            [0.41542853534829305, 0.48824158947494756, -0.7936531007957252],
+            1.1798130305286763,
+            [0.047335543645589895, 0.14871583386850523, 0.17065349716255868],
         );
         assert!((parry_distance(&a, &b) - 0.0098).abs() < 1e-4);
-        assert_eq!(touch(&a, &b), Some(false));
-        assert_eq!(touch(&b, &a), Some(false));
+        assert_eq!(touch_both(&a, &b), Some(false));
     }
 
     /// A thin rod 2.4 mm beside a long box: a separating plane shows the gap (the box's
@@ -579,33 +584,24 @@ mod tests {
     /// finds them apart both ways round, and alternating projections bound the gap below.
     #[test]
     fn a_rod_beside_a_box_is_apart_where_parrys_distance_says_touching() {
-        let a = shape(
+        let a = case(
             true,
-            V::new(-0.29205482797856797, -0.0551462316605587, -0.2104450665486572),
-            rotation(
-                [0.05743025347379196, -0.12931100809740476, -0.2064084727646512],
-                -0.500564804472953,
-            ),
-            0.07221259732538152,
-            0.015151300474150314,
-            0.2431521951115654,
+            [-0.29205482797856797, -0.0551462316605587, -0.2104450665486572],
+            [0.05743025347379196, -0.12931100809740476, -0.2064084727646512],
+            -0.500564804472953,
+            [0.07221259732538152, 0.015151300474150314, 0.2431521951115654],
         );
-        let b = shape(
+        let b = case(
             false,
-            V::new(-0.01935255387093831, -0.05915222990057486, 0.16575927697795925),
-            rotation(
-                [0.7920670731433355, 0.5941383752318009, 0.3724927806763808],
-                2.701675838101376,
-            ),
-            0.22358129541594163,
-            0.02250989939328075,
-            0.005,
+            [-0.01935255387093831, -0.05915222990057486, 0.16575927697795925],
+            [0.7920670731433355, 0.5941383752318009, 0.3724927806763808],
+            2.701675838101376,
+            [0.22358129541594163, 0.02250989939328075, 0.005],
         );
         assert_eq!(parry_distance(&a, &b), 0.0);
         assert!((parry_contact_distance(&a, &b) - 0.0023).abs() < 1e-4);
         assert!(distance_bounds(&a, &b).0 > 0.0023);
-        assert_eq!(touch(&a, &b), Some(false));
-        assert_eq!(touch(&b, &a), Some(false));
+        assert_eq!(touch_both(&a, &b), Some(false));
     }
 
     /// A flat cylinder 1.9 mm from a box (parry's distance and contact queries agree). One way
@@ -613,31 +609,22 @@ mod tests {
     /// plane while its simplex was still 27 mm away, and gave up; it now searches on.
     #[test]
     fn a_direction_that_fails_to_separate_far_from_contact_does_not_end_the_search() {
-        let a = shape(
+        let a = case(
             false,
-            V::new(0.12653560690143134, 0.10034154125407911, 0.24153363725010607),
-            rotation(
-                [0.4023364421630917, 0.09209927124986128, 0.9635031033653064],
-                2.3322922537883666,
-            ),
-            0.20546101847772474,
-            0.15101200359886097,
-            0.005,
+            [0.12653560690143134, 0.10034154125407911, 0.24153363725010607],
+            [0.4023364421630917, 0.09209927124986128, 0.9635031033653064],
+            2.3322922537883666,
+            [0.20546101847772474, 0.15101200359886097, 0.005],
         );
-        let b = shape(
+        let b = case(
             true,
-            V::new(0.25526687466334663, -0.07642842226491763, 0.03626481925461293),
-            rotation(
-                [-0.3127273227930586, -0.6990231262566216, -0.4274916552648053],
-                -0.3008969180341953,
-            ),
-            0.16455787558584334,
-            0.08130079142118658,
-            0.059472206009534234,
+            [0.25526687466334663, -0.07642842226491763, 0.03626481925461293],
+            [-0.3127273227930586, -0.6990231262566216, -0.4274916552648053],
+            -0.3008969180341953,
+            [0.16455787558584334, 0.08130079142118658, 0.059472206009534234],
         );
         assert!((parry_distance(&a, &b) - 0.0019).abs() < 1e-4);
-        assert_eq!(touch(&a, &b), Some(false));
-        assert_eq!(touch(&b, &a), Some(false));
+        assert_eq!(touch_both(&a, &b), Some(false));
     }
 
     /// Two fat cylinders whose rims cross by 71 µm (an independent maximisation of the
@@ -647,27 +634,19 @@ mod tests {
     /// touching both ways round, and so do alternating projections.
     #[test]
     fn crossed_cylinder_rims_touch_where_parry_measures_a_gap() {
-        let a = shape(
+        let a = case(
             false,
-            V::new(-0.09430963990525013, -0.07690310651620252, -0.1605112230119456),
-            rotation(
-                [0.07636588284115754, -0.7322971959854035, 0.5223013789410742],
-                -0.8329414550628828,
-            ),
-            0.11161392656384565,
-            0.16508026287833516,
-            0.005,
+            [-0.09430963990525013, -0.07690310651620252, -0.1605112230119456],
+            [0.07636588284115754, -0.7322971959854035, 0.5223013789410742],
+            -0.8329414550628828,
+            [0.11161392656384565, 0.16508026287833516, 0.005],
         );
-        let b = shape(
+        let b = case(
             false,
-            V::new(0.2796881887315925, -0.03576378897133392, -0.1305220327771132),
-            rotation(
-                [-0.6555674372049116, -0.6467608410669616, -0.6105929259375106],
-                -2.7181363931862883,
-            ),
-            0.11653100403513764,
-            0.14324138050620908,
-            0.005,
+            [0.2796881887315925, -0.03576378897133392, -0.1305220327771132],
+            [-0.6555674372049116, -0.6467608410669616, -0.6105929259375106],
+            -2.7181363931862883,
+            [0.11653100403513764, 0.14324138050620908, 0.005],
         );
         // parry's shapes are these shapes (its support points agree to 0.2 µm)...
         for s in [&a, &b] {
@@ -684,8 +663,7 @@ mod tests {
         // ...but its distance query finds a gap that alternating projections close.
         assert!(parry_distance(&a, &b) > 0.003);
         assert!(distance_bounds(&a, &b).1 < 1e-9);
-        assert_eq!(touch(&a, &b), Some(true));
-        assert_eq!(touch(&b, &a), Some(true));
+        assert_eq!(touch_both(&a, &b), Some(true));
     }
 
     proptest! {
@@ -706,8 +684,8 @@ mod tests {
             aa in -3.2..3.2f64, ab in -3.2..3.2f64,
             da in prop::array::uniform3(0.005..0.25f64), db in prop::array::uniform3(0.005..0.25f64),
         ) {
-            let a = shape(ka, V::from(ca), rotation(ra, aa), da[0], da[1], da[2]);
-            let b = shape(kb, V::from(cb), rotation(rb, ab), db[0], db[1], db[2]);
+            let a = case(ka, ca, ra, aa, da);
+            let b = case(kb, cb, rb, ab, db);
             let (lower, upper) = distance_bounds(&a, &b);
             let ours = touch(&a, &b);
             let other = touch(&b, &a);

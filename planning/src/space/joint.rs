@@ -121,13 +121,7 @@ impl JointSpace {
             any_continuous: continuous.contains(&true),
             wrap_lanes: continuous
                 .chunks_exact(4)
-                .map(|c| {
-                    c.iter()
-                        .map(|&c| f64::from(u8::from(c)))
-                        .collect::<Vec<_>>()
-                        .try_into()
-                        .expect("four")
-                })
+                .map(|c| std::array::from_fn(|k| f64::from(u8::from(c[k]))))
                 .collect(),
             weights: vec![1.0; n],
             velocity_limits: vec![f64::INFINITY; n],
