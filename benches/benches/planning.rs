@@ -7,7 +7,10 @@
 //! nearest-neighbour query (and one query for the 10 nearest) among 20,000 random Panda
 //! configurations, with k-d trees (the Panda's bounded joints) and with k-d trees
 //! on the torus (the same space with its first joint made continuous), and one query among
-//! 1,000 states packed in a pocket (±0.3 rad) from samples of the whole space.
+//! 1,000 states packed in a pocket (±0.3 rad) from samples of the whole space;
+//! `nn/k10_4k_fetch` queries the 10 nearest among 4,000 random configurations of the Fetch's
+//! torso and arm (three continuous joints), the size of a LazyPRM roadmap after a few tenths
+//! of a second.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -242,6 +245,32 @@ fn nearest_neighbours(c: &mut Criterion) {
             });
         }
     }
+    // The Fetch's torso and arm, with interleaved queries as
+    // LazyPRM makes them: each new vertex asks for its 10 nearest before it is inserted.
+    let model = RobotModel::builtin("fetch").expect("built-in robot");
+    let fetch =
+        JointSpace::from_chain(&Chain::named(&model, "arm_with_torso").expect("built-in chain")).expect("valid bounds");
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(6);
+    let mut nn = NearestNeighbors::new(8);
+    let mut q = [0.0; 8];
+    for _ in 0..4_000 {
+        fetch.sample(&mut rng, &mut q);
+        black_box(nn.k_nearest(&fetch, &q, 10));
+        nn.insert(&q);
+    }
+    let queries: Vec<[f64; 8]> = (0..256)
+        .map(|_| {
+            fetch.sample(&mut rng, &mut q);
+            q
+        })
+        .collect();
+    let mut i = 0;
+    g.bench_function("k10_4k_fetch", |b| {
+        b.iter(|| {
+            i = (i + 1) % queries.len();
+            black_box(nn.k_nearest(&fetch, &queries[i], 10))
+        })
+    });
     g.finish();
 }
 
