@@ -538,7 +538,7 @@ struct SearchScratch {
     closed: Vec<u32>,
     cost: Vec<f64>,
     parent: Vec<u32>,
-    open: BinaryHeap<Reverse<(Key, u32)>>,
+    open: BinaryHeap<Reverse<(i64, u32)>>,
 }
 
 impl SearchScratch {
@@ -557,7 +557,7 @@ impl SearchScratch {
         self.begin(adjacency.len());
         for &v in sources {
             self.improve(v, 0.0, u32::MAX);
-            self.open.push(Reverse((Key(0.0), v)));
+            self.open.push(Reverse((order_key(0.0), v)));
         }
         while let Some(Reverse((_, v))) = self.open.pop() {
             if !self.close(v) {
@@ -576,7 +576,7 @@ impl SearchScratch {
                     && let Some(key) = priority(u, c)
                 {
                     self.improve(u, c, v);
-                    self.open.push(Reverse((Key(key), u)));
+                    self.open.push(Reverse((order_key(key), u)));
                 }
             }
         }
@@ -627,22 +627,12 @@ impl SearchScratch {
     }
 }
 
-/// An `f64` ordered by `total_cmp`, for the A* queue.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Key(f64);
-
-impl Eq for Key {}
-
-impl PartialOrd for Key {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Key {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
+/// An `f64` as an integer with the order of [`f64::total_cmp`] (the transform it applies at
+/// each comparison, applied once when a vertex is queued), for the A* queue.
+#[inline]
+fn order_key(x: f64) -> i64 {
+    let bits = x.to_bits() as i64;
+    bits ^ (((bits >> 63) as u64) >> 1) as i64
 }
 
 impl<S: Space> Planner<S> for LazyPrm {
@@ -882,6 +872,32 @@ mod tests {
         path.windows(2)
             .map(|w| space.distance(roadmap.nn.state(w[0] as usize), roadmap.nn.state(w[1] as usize)))
             .sum()
+    }
+
+    #[test]
+    fn queue_keys_order_like_total_cmp() {
+        let values = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -2.5,
+            -f64::MIN_POSITIVE,
+            -0.0,
+            0.0,
+            f64::MIN_POSITIVE,
+            1e-300,
+            0.1,
+            0.1 + 1e-17,
+            0.30000000000000004,
+            2.5,
+            1e300,
+            f64::INFINITY,
+            f64::NAN,
+        ];
+        for a in values {
+            for b in values {
+                assert_eq!(order_key(a).cmp(&order_key(b)), a.total_cmp(&b), "{a} against {b}");
+            }
+        }
     }
 
     #[test]
