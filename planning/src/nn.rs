@@ -1045,6 +1045,9 @@ impl LaneView<'_> {
         // The nearest-state bound from the smallest sum so far (infinite until one is seen).
         let mut least = f32::INFINITY;
         let mut least_bound = f32::INFINITY;
+        // The filter's bound from the collector's radius, which changes only when a state is
+        // offered.
+        let mut radius_bound = to_f32(c.radius() + SLACK + slop);
         for (block, lanes) in self.lanes.chunks_exact(dim * LANES).enumerate() {
             // One block's weighted squared distances: a sum per state, in coordinate order.
             let mut sum = f32x8::ZERO;
@@ -1055,7 +1058,7 @@ impl LaneView<'_> {
                 }
                 sum += d * d;
             }
-            let mut bound = to_f32(c.radius() + SLACK + slop);
+            let mut bound = radius_bound;
             if C::NEAREST && block == 0 {
                 // NaN (padding) lanes drop out of `f32::min`.
                 let smallest = sum.to_array().into_iter().fold(f32::INFINITY, f32::min);
@@ -1075,6 +1078,9 @@ impl LaneView<'_> {
                 bound = bound.min(least_bound);
             }
             let mut pass = sum.simd_le(f32x8::splat(bound)).to_bitmask();
+            if pass == 0 {
+                continue;
+            }
             while pass != 0 {
                 let k = block * LANES + pass.trailing_zeros() as usize;
                 pass &= pass - 1;
@@ -1083,6 +1089,7 @@ impl LaneView<'_> {
                     c.offer(space.distance(q, index.state(id as usize)), id);
                 }
             }
+            radius_bound = to_f32(c.radius() + SLACK + slop);
         }
     }
 }
