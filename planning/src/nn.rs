@@ -11,9 +11,9 @@
 //! continuous, 8 µs). The k-d trees keep each node's bounding box, which prunes queries far
 //! from every state: 1,000 states in a pocket answer a sample of the whole space in about
 //! 3 µs, against 7 µs with the cells' split planes alone. Trees of up to a few hundred
-//! states, and trees of up to 2,048 far from the query, are scanned instead of descended: an
-//! f32 copy of their weighted states, eight per step, filters with a bound widened past its
-//! rounding, and the space's distance decides. All give the exact answer, ties broken by id.
+//! states, trees of up to 2,048 far from the query, and, for a k-nearest query, trees of up
+//! to 4,096 are scanned instead of descended: an f32 copy of their weighted states, eight per
+//! step, filters with a bound widened past its rounding, and the space's distance decides. All give the exact answer, ties broken by id.
 //! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
 //! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
 //! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`
@@ -957,11 +957,11 @@ impl KdTree {
 
     /// Whether to scan this tree rather than descend it (only a tree with `lanes`): a small
     /// tree always (a scan of a few hundred states costs less than descent's bookkeeping),
-    /// for a k-nearest query (`several`) always (see [`SCAN_MAX`]), and for a nearest-state
+    /// for a k-nearest query always (see [`SCAN_MAX`]), and for a nearest-state
     /// query a tree of at most [`SCAN_FAR`] states when the query is [`KdTree::far`] from it.
     #[inline]
-    fn scanned(&self, several: bool, far: impl FnOnce() -> bool) -> bool {
-        !self.lanes.is_empty() && (several || self.ids.len() <= SCAN_ALWAYS || (self.ids.len() <= SCAN_FAR && far()))
+    fn scanned(&self, k_nearest: bool, far: impl FnOnce() -> bool) -> bool {
+        !self.lanes.is_empty() && (k_nearest || self.ids.len() <= SCAN_ALWAYS || (self.ids.len() <= SCAN_FAR && far()))
     }
 
     /// Whether `q` (angles wrapped) lies farther from the root's box than half the box's
