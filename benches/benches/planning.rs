@@ -245,8 +245,8 @@ fn nearest_neighbours(c: &mut Criterion) {
             });
         }
     }
-    // The Fetch's torso and arm, with interleaved queries as
-    // LazyPRM makes them: each new vertex asks for its 10 nearest before it is inserted.
+    // The Fetch's torso and arm, with interleaved queries as LazyPRM makes them: each new
+    // vertex asks for its 10 nearest before it is inserted.
     let model = RobotModel::builtin("fetch").expect("built-in robot");
     let fetch =
         JointSpace::from_chain(&Chain::named(&model, "arm_with_torso").expect("built-in chain")).expect("valid bounds");
