@@ -393,6 +393,19 @@ fn bench_kin_writes_json() {
 }
 
 #[test]
+fn bench_plan_names_an_unreadable_file_once() {
+    let missing = std::env::temp_dir().join(format!("hearth_cli_missing_{}.json", std::process::id()));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
+        .args(["bench", "plan", "--problems", missing.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    // The I/O error's message appears once, after the file's name.
+    assert!(!o.status.success() && err.contains("cannot read"), "{err}");
+    assert_eq!(err.matches("os error 2").count(), 1, "{err}");
+}
+
+#[test]
 fn bench_plan_writes_results_json() {
     let dir = std::env::temp_dir().join(format!("hearth_cli_plan_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -600,6 +613,7 @@ fn bench_plan_writes_results_json() {
             "--connect applies to --planner birrt only",
         ),
         (&["--connect", "sideways"][..], "invalid value 'sideways'"),
+        (&["--repeat", "0"][..], "0 is not in 1.."),
     ] {
         let o = bench_plan(extra);
         let err = String::from_utf8_lossy(&o.stderr);

@@ -48,7 +48,8 @@ pub enum DisabledReason {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct SelfCollisionSettings {
-    /// Random configurations sampled.
+    /// Random configurations sampled. With 0, only adjacent pairs and pairs touching in the
+    /// neutral configuration are disabled: no pair is called `never` without a sample.
     pub samples: usize,
     /// A pair colliding in at least this fraction of samples is `always` disabled.
     pub always_fraction: f64,
@@ -150,21 +151,25 @@ impl SelfCollisionMatrix {
         let mut hits = vec![0usize; pairs.len()];
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(settings.seed);
         let mut q = q0;
+        // Samples whose forward kinematics succeeded: the evidence for `Never` and `Always`.
+        let mut sampled = 0usize;
         for _ in 0..settings.samples {
             model.random_configuration(&mut rng, &mut q);
             if model.fk(&q, &mut poses).is_err() {
                 continue;
             }
+            sampled += 1;
             for (k, &(a, b)) in pairs.iter().enumerate() {
                 if links_touch(model, &poses, a, b) {
                     hits[k] += 1;
                 }
             }
         }
-        for (k, &(a, b)) in pairs.iter().enumerate() {
+        // Without a single sample, no pair has been seen apart (or together): none is `Never`.
+        for (k, &(a, b)) in pairs.iter().enumerate().filter(|_| sampled > 0) {
             if hits[k] == 0 {
                 m.set(a, b, DisabledReason::Never);
-            } else if hits[k] as f64 >= settings.always_fraction * settings.samples as f64 {
+            } else if hits[k] as f64 >= settings.always_fraction * sampled as f64 {
                 m.set(a, b, DisabledReason::Always);
             }
         }

@@ -43,6 +43,31 @@ fn panda_keeps_the_pairs_that_can_collide() {
 }
 
 #[test]
+fn no_samples_call_no_pair_never() {
+    // Without samples there is no evidence that a pair never touches: only adjacent pairs and
+    // those touching in the neutral configuration may be skipped.
+    let m = RobotModel::builtin("panda").unwrap();
+    let none = SelfCollisionMatrix::compute(
+        &m,
+        &SelfCollisionSettings {
+            samples: 0,
+            ..settings()
+        },
+    );
+    let id = |n: &str| m.link_index(n).unwrap();
+    assert!(!none.is_disabled(id("panda_hand"), id("panda_link0")));
+    assert!(!none.is_disabled(id("panda_link0"), id("panda_link7")));
+    assert!(none.is_disabled(id("panda_link0"), id("panda_link1")));
+    for (a, b) in [("panda_link0", "panda_link1"), ("panda_link0", "panda_link7")] {
+        let reason = none.reason(id(a), id(b));
+        assert_ne!(reason, Some(DisabledReason::Never), "{a}-{b}");
+    }
+    // Far more pairs are checked than after sampling (where far links are `never`).
+    let sampled = SelfCollisionMatrix::compute(&m, &settings());
+    assert!(none.checked_pairs().len() > sampled.checked_pairs().len());
+}
+
+#[test]
 fn deterministic_for_a_seed() {
     let m = RobotModel::builtin("fetch").unwrap();
     let s = SelfCollisionSettings {

@@ -32,7 +32,7 @@ pub struct BenchKinArgs {
     /// Built-in robot name or URDF path.
     #[arg(long)]
     robot: String,
-    /// Random reachable poses for the IK part.
+    /// Random reachable poses for the IK part (at least 1).
     #[arg(long, default_value_t = 1000)]
     samples: usize,
     /// Chain to use (default: the robot's first named chain).
@@ -166,6 +166,7 @@ fn median_ns(batches: usize, inner: usize, mut f: impl FnMut(usize)) -> f64 {
 }
 
 fn kin(a: BenchKinArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(a.samples > 0, "--samples must be at least 1");
     let m = RobotModel::load(&a.robot).with_context(|| format!("loading robot `{}`", a.robot))?;
     let chain = bench_chain(&m, a.chain.as_deref())?;
     let tip = chain.tip().context("chain has no tip")?;

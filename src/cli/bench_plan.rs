@@ -168,8 +168,8 @@ pub struct BenchPlanArgs {
     /// the repeat: different seeds give unrelated streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Plans per problem.
-    #[arg(long, default_value_t = 1)]
+    /// Plans per problem (at least 1).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
     /// Only these problems: `FAMILY` (a whole family) or `FAMILY:ID` (one problem), e.g.
     /// `--only table_under_pick:13 cage`.
