@@ -248,10 +248,15 @@ impl Path {
     /// let space = JointSpace::new(&[0.0, 0.0], &[5.0, 5.0], &[false, false])?;
     /// let path = Path { states: vec![vec![0.0, 0.0], vec![3.0, 4.0], vec![3.0, 5.0]] };
     /// assert_eq!(path.length(&space), 6.0);
+    /// // A path of one state has length +0 (not the -0 of an empty float sum).
+    /// let still = Path { states: vec![vec![1.0, 1.0]] };
+    /// assert!(still.length(&space) == 0.0 && still.length(&space).is_sign_positive());
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn length<S: Space>(&self, space: &S) -> f64 {
-        self.states.windows(2).map(|w| space.distance(&w[0], &w[1])).sum()
+        self.states
+            .windows(2)
+            .fold(0.0, |sum, w| sum + space.distance(&w[0], &w[1]))
     }
 }
 

@@ -440,6 +440,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             );
         }
     }
+    if sets.iter().all(|(s, _)| s.problems.is_empty()) {
+        let given: Vec<String> = a.problems.iter().map(|p| p.display().to_string()).collect();
+        bail!("no problems to plan in {}", given.join(", "));
+    }
     // A results file that cannot be written is reported before any plan is run (and after
     // every other input was checked, so that bad input leaves no file behind).
     super::bench::create_json(a.json.as_deref())?;
@@ -480,7 +484,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             } else {
                 String::new()
             };
-            eprintln!("{}: {}{step}{racing}", set.robot, s.note);
+            // (Without a joints file next to the problems there is no note.)
+            let about = format!("{}{step}{racing}", s.note);
+            eprintln!("{}: {}", set.robot, about.trim_start_matches("; "));
             if a.warm_up > 0 {
                 let mut v =
                     RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));

@@ -845,16 +845,19 @@ impl Trajectory {
     /// // The samples are joined by straight lines, which may cut the corner by a little.
     /// let length = t.length(&space, 0.01);
     /// assert!(length <= path.length(&space) + 1e-9 && length > path.length(&space) - 0.01);
+    /// // Standing still: length +0.
+    /// let still = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.5; 2]] }, &limits)?;
+    /// assert!(still.length(&space, 0.01) == 0.0 && still.length(&space, 0.01).is_sign_positive());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn length<S: Space>(&self, space: &S, resolution: f64) -> f64 {
         let mut flat = Vec::new();
         self.discretise(space, resolution, &mut flat);
-        flat.chunks(self.dim.max(1))
-            .collect::<Vec<_>>()
-            .windows(2)
-            .map(|w| space.distance(w[0], w[1]))
-            .sum()
+        let dim = self.dim.max(1);
+        // (A fold from +0: an empty float sum is -0, which a table would print as "-0.000".)
+        flat.chunks(dim)
+            .zip(flat.chunks(dim).skip(1))
+            .fold(0.0, |sum, (a, b)| sum + space.distance(a, b))
     }
 
     /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
