@@ -174,7 +174,7 @@ fn planners(c: &mut Criterion) {
     g.bench_function("ruckig_waypoints", |b| {
         b.iter(|| {
             for t in &smoothed {
-                let path = t.to_path(&f.space, 0.2);
+                let path = t.to_path(&f.space, 0.2).expect("0.2 is a valid resolution");
                 black_box(Trajectory::jerk_limited(&f.space, &path, &f.limits).ok());
             }
         })

@@ -557,8 +557,8 @@ pub(crate) fn positive_finite(what: &str, value: f64) -> Result<f64, PlanError> 
     positive(value).ok_or_else(|| PlanError::BadInput(format!("{what} is {value}; it must be positive and finite")))
 }
 
-/// The spacing that the samplers without a `Result` (`MotionValidator::new`, a trajectory's
-/// `to_path` and `length`) use for a resolution that is not positive and finite.
+/// The spacing that [`MotionValidator::new`](crate::motion::MotionValidator::new), which has
+/// no `Result`, uses for a resolution that is not positive and finite.
 pub(crate) fn resolution_or_default(resolution: f64) -> f64 {
     positive(resolution).unwrap_or(0.01)
 }

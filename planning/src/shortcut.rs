@@ -750,7 +750,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         out_parabolic.absorb(&stats);
         if verify(&trajectory, validator) {
             return Ok(Smoothed {
-                path: trajectory.to_path(&space, motion.resolution()),
+                path: trajectory.to_path(&space, motion.resolution()).map_err(bad_input)?,
                 trajectory,
                 repaired: 0,
                 random: out_random,
@@ -787,7 +787,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
                 break;
             }
         }
-        current = trajectory.to_path(&space, motion.resolution());
+        current = trajectory.to_path(&space, motion.resolution()).map_err(bad_input)?;
         ok
     } else {
         verify(&trajectory, validator)

@@ -122,7 +122,7 @@ fn parabolic_shortcutting_shortens_time_keeps_validity_and_limits() {
             motion.space().distance(&q, &[0.9, 0.9]) < 1e-9,
             "seed {seed}: ends at {q:?}"
         );
-        let dense = t.to_path(motion.space(), 0.001);
+        let dense = t.to_path(motion.space(), 0.001).unwrap();
         assert!(path_valid(&mut motion, &dense));
     }
 }
@@ -142,7 +142,7 @@ fn parabolic_shortcutting_is_deterministic() {
             &mut rng,
         )
         .unwrap();
-        t.to_path(motion.space(), 0.01)
+        t.to_path(motion.space(), 0.01).unwrap()
     };
     assert_eq!(run(), run());
 }
@@ -464,7 +464,7 @@ fn jerk_limited_passes_through_waypoints() {
         states: vec![vec![0.1, 0.1], vec![0.5, 0.6], vec![0.9, 0.2]],
     };
     let t = Trajectory::jerk_limited(&space, &path, &limits).unwrap();
-    let dense = t.to_path(&space, 0.0005);
+    let dense = t.to_path(&space, 0.0005).unwrap();
     let nearest = dense
         .states
         .iter()
@@ -489,7 +489,7 @@ fn continuous_joints_take_the_short_way() {
     let t = Trajectory::rest_to_rest(&space, &path, &limits).unwrap();
     // 2π − 6 ≈ 0.283 rad, not 6 rad.
     assert!(t.duration() < 1.2, "{}", t.duration());
-    let dense = t.to_path(&space, 0.01);
+    let dense = t.to_path(&space, 0.01).unwrap();
     assert!(dense.states.iter().all(|q| q[0].abs() <= std::f64::consts::PI + 1e-12));
 }
 
@@ -605,16 +605,22 @@ fn resolutions_that_are_not_positive_are_bad_input() {
             other => panic!("check at {r}: {other:?}"),
         }
         assert_eq!(v.1, 0, "a trajectory's check at {r} checked states");
-        // The motion validator refuses it too, and its infallible constructor and the
-        // trajectory's sampling read it as 0.01 (an infinite spacing would check nothing).
+        // The motion validator refuses it too, and its infallible constructor reads it as 0.01
+        // (an infinite spacing would check nothing); the trajectory's sampling refuses it.
         match MotionValidator::try_new(space.clone(), r) {
             Err(PlanError::BadInput(m)) => assert!(m.contains("resolution"), "{m}"),
             other => panic!("try_new at {r}: {:?}", other.map(|m| m.resolution())),
         }
         assert_eq!(MotionValidator::new(space.clone(), r).resolution(), 0.01);
-        let states = trajectory.to_path(&space, r).states;
-        assert!(states.len() > 80, "to_path at {r}: {} states", states.len());
-        assert!(states.windows(2).all(|w| space.distance(&w[0], &w[1]) <= 0.01 + 1e-12));
+        for sampled in [
+            trajectory.to_path(&space, r).map(|p| p.states.len() as f64),
+            trajectory.length(&space, r),
+        ] {
+            match sampled {
+                Err(TrajectoryError::BadResolution { value }) => assert!(value.to_bits() == r.to_bits()),
+                other => panic!("sampling at {r}: {other:?}"),
+            }
+        }
     }
 }
 
@@ -728,7 +734,7 @@ proptest! {
         for t in [&mut t, &mut ramp.clone()] {
             let mut seen = Record::default();
             t.check(&square(), &mut seen, resolution).unwrap();
-            let path = t.to_path(&square(), resolution);
+            let path = t.to_path(&square(), resolution).unwrap();
             prop_assert_eq!(seen.0.len(), path.states.len());
             let gaps: Vec<f64> = path.states.windows(2).map(|w| square().distance(&w[0], &w[1])).collect();
             prop_assert!(gaps.iter().all(|&g| g <= resolution + 1e-12), "{gaps:?}");

@@ -874,18 +874,17 @@ impl Arm {
         // The jerk-limited motion, kept only if it stays collision-free.
         let jerk = match self.settings.jerk {
             JerkPass::Average => Some(smoothed.trajectory.with_jerk_limits(&self.limits)),
-            JerkPass::Waypoints { max, sweeps } => {
-                let mut waypoints = smoothed.trajectory.to_path(&self.space, WAYPOINT_SPACING);
-                if let Some(max) = max {
-                    thin_waypoints(&mut waypoints.states, max);
-                }
-                Some(Trajectory::jerk_limited_with(
-                    &self.space,
-                    &waypoints,
-                    &self.limits,
-                    sweeps,
-                ))
-            }
+            JerkPass::Waypoints { max, sweeps } => Some(
+                smoothed
+                    .trajectory
+                    .to_path(&self.space, WAYPOINT_SPACING)
+                    .and_then(|mut waypoints| {
+                        if let Some(max) = max {
+                            thin_waypoints(&mut waypoints.states, max);
+                        }
+                        Trajectory::jerk_limited_with(&self.space, &waypoints, &self.limits, sweeps)
+                    }),
+            ),
             JerkPass::Off => None,
         };
         let (trajectory, jerk_limited) = match jerk {
@@ -908,7 +907,9 @@ impl Arm {
             }
             None => trajectory,
         };
-        let path_length = trajectory.length(&self.space, self.settings.resolution);
+        let path_length = trajectory
+            .length(&self.space, self.settings.resolution)
+            .map_err(|e| SkillError::BadInput(format!("arm settings: {e}")))?;
         Ok(ArmPlan {
             report: MotionReport {
                 planning_time: t0.elapsed(),
@@ -1615,16 +1616,21 @@ fn check_finite_pose(p: &Isometry3<f64>) -> SkillResult<()> {
     }
 }
 
-/// The path a plan's trajectory follows, sampled at `resolution` (for inspection).
+/// The path a plan's trajectory follows, sampled at `resolution` (for inspection);
+/// [`SkillError::BadInput`] for a resolution that is not positive and finite.
 ///
 /// ```no_run
-/// # fn f(arm: &hearth_skills::arm::Arm, plan: &hearth_skills::arm::ArmPlan) {
-/// let path = hearth_skills::arm::plan_path(arm, plan, 0.05);
+/// # fn f(arm: &hearth_skills::arm::Arm, plan: &hearth_skills::arm::ArmPlan) -> Result<(), hearth_skills::SkillError> {
+/// let path = hearth_skills::arm::plan_path(arm, plan, 0.05)?;
 /// assert!(path.states.len() >= 2);
+/// assert!(hearth_skills::arm::plan_path(arm, plan, 0.0).is_err());
+/// # Ok(())
 /// # }
 /// ```
-pub fn plan_path(arm: &Arm, plan: &ArmPlan, resolution: f64) -> Path {
-    plan.trajectory.to_path(&arm.space, resolution)
+pub fn plan_path(arm: &Arm, plan: &ArmPlan, resolution: f64) -> Result<Path, SkillError> {
+    plan.trajectory
+        .to_path(&arm.space, resolution)
+        .map_err(|e| SkillError::BadInput(format!("plan path: {e}")))
 }
 
 #[cfg(test)]

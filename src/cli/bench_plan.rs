@@ -622,17 +622,18 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                 }
                                 row["repaired_edges"] = json!(out.repaired);
                                 row["smoothing_fell_back"] = json!(out.fell_back);
-                                row["path_length"] = json!(out.trajectory.length(&space, a.resolution));
+                                // (`--resolution` was checked to be positive and finite.)
+                                row["path_length"] = json!(out.trajectory.length(&space, a.resolution)?);
                                 row["duration_s"] = json!(out.trajectory.duration());
                                 if check.is_ok() && a.jerk != JerkKind::None {
                                     let t0 = Instant::now();
                                     let jerk = match a.jerk {
                                         JerkKind::Average => out.trajectory.with_jerk_limits(&rs.limits),
-                                        JerkKind::Waypoints | JerkKind::None => Trajectory::jerk_limited(
-                                            &space,
-                                            &out.trajectory.to_path(&space, WAYPOINT_SPACING),
-                                            &rs.limits,
-                                        ),
+                                        JerkKind::Waypoints | JerkKind::None => {
+                                            out.trajectory.to_path(&space, WAYPOINT_SPACING).and_then(|waypoints| {
+                                                Trajectory::jerk_limited(&space, &waypoints, &rs.limits)
+                                            })
+                                        }
                                     };
                                     row["jerk_time_s"] = json!(t0.elapsed().as_secs_f64());
                                     if let Ok(j) = jerk {

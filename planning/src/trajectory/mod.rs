@@ -677,8 +677,8 @@ impl Trajectory {
         flat: &mut Vec<f64>,
     ) -> bool {
         flat.clear();
-        self.discretise(space, resolution, flat);
-        first_invalid(flat, self.dim, validator).is_none()
+        // (A resolution that is not positive and finite proves nothing valid.)
+        self.discretise(space, resolution, flat).is_ok() && first_invalid(flat, self.dim, validator).is_none()
     }
 
     /// Number of coordinates.
@@ -797,8 +797,7 @@ impl Trajectory {
 
     /// States along the trajectory no more than `resolution` apart (in the space's distance),
     /// from the first state to the last, with continuous coordinates wrapped back. A
-    /// `resolution` that is not positive and finite reads as 0.01, as in
-    /// [`Trajectory::length`] ([`Trajectory::check`] refuses it instead).
+    /// `resolution` that is not positive and finite is [`TrajectoryError::BadResolution`].
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -809,16 +808,17 @@ impl Trajectory {
     /// let limits = Limits::new(vec![1.0], vec![1.0], vec![f64::INFINITY])?;
     /// // The short way from 3 to -3 rad is through π: the motion ends at 2π - 3, unwrapped.
     /// let t = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![3.0], vec![-3.0]] }, &limits)?;
-    /// let path = t.to_path(&space, 0.05);
+    /// let path = t.to_path(&space, 0.05)?;
     /// assert!(path.states.windows(2).all(|w| space.distance(&w[0], &w[1]) <= 0.05));
     /// assert!((path.states.last().unwrap()[0] + 3.0).abs() < 1e-9);
+    /// assert!(t.to_path(&space, f64::NAN).is_err());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn to_path<S: Space>(&self, space: &S, resolution: f64) -> Path {
+    pub fn to_path<S: Space>(&self, space: &S, resolution: f64) -> Result<Path, TrajectoryError> {
         let mut flat = Vec::new();
-        self.discretise(space, resolution, &mut flat);
+        self.discretise(space, resolution, &mut flat)?;
         let dim = self.dim.max(1);
-        Path {
+        Ok(Path {
             states: flat
                 .chunks(dim)
                 .map(|q| {
@@ -827,42 +827,48 @@ impl Trajectory {
                     q
                 })
                 .collect(),
-        }
+        })
     }
 
-    /// Length of the trajectory's path in the space's metric (sampled at `resolution`; one that
-    /// is not positive and finite reads as 0.01).
+    /// Length of the trajectory's path in the space's metric, sampled at `resolution` (one that
+    /// is not positive and finite is [`TrajectoryError::BadResolution`]).
     ///
     /// ```
     /// use hearth_planning::planner::Path;
     /// use hearth_planning::space::JointSpace;
-    /// use hearth_planning::trajectory::{Limits, Trajectory};
+    /// use hearth_planning::trajectory::{Limits, Trajectory, TrajectoryError};
     ///
     /// let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
     /// let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2])?;
     /// let path = Path { states: vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 1.0]] };
     /// let t = Trajectory::rest_to_rest(&space, &path, &limits)?;
     /// // The samples are joined by straight lines, which may cut the corner by a little.
-    /// let length = t.length(&space, 0.01);
+    /// let length = t.length(&space, 0.01)?;
     /// assert!(length <= path.length(&space) + 1e-9 && length > path.length(&space) - 0.01);
+    /// assert_eq!(t.length(&space, 0.0), Err(TrajectoryError::BadResolution { value: 0.0 }));
     /// // Standing still: length +0.
     /// let still = Trajectory::rest_to_rest(&space, &Path { states: vec![vec![0.5; 2]] }, &limits)?;
-    /// assert!(still.length(&space, 0.01) == 0.0 && still.length(&space, 0.01).is_sign_positive());
+    /// let none = still.length(&space, 0.01)?;
+    /// assert!(none == 0.0 && none.is_sign_positive());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn length<S: Space>(&self, space: &S, resolution: f64) -> f64 {
+    pub fn length<S: Space>(&self, space: &S, resolution: f64) -> Result<f64, TrajectoryError> {
         let mut flat = Vec::new();
-        self.discretise(space, resolution, &mut flat);
+        self.discretise(space, resolution, &mut flat)?;
         let dim = self.dim.max(1);
         // (A fold from +0: an empty float sum is -0, which a table would print as "-0.000".)
-        flat.chunks(dim)
+        Ok(flat
+            .chunks(dim)
             .zip(flat.chunks(dim).skip(1))
-            .fold(0.0, |sum, (a, b)| sum + space.distance(a, b))
+            .fold(0.0, |sum, (a, b)| sum + space.distance(a, b)))
     }
 
     /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
-    /// time step to the local speed.
-    fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) {
+    /// time step to the local speed; a `resolution` that is not positive and finite is refused.
+    fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) -> Result<(), TrajectoryError> {
+        if positive(resolution).is_none() {
+            return Err(TrajectoryError::BadResolution { value: resolution });
+        }
         discretise_timed(
             self.dim,
             self.duration(),
@@ -872,6 +878,7 @@ impl Trajectory {
             out,
             None,
         );
+        Ok(())
     }
 
     /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
