@@ -171,10 +171,13 @@ struct Roadmap {
     /// The graph search's arrays.
     scratch: SearchScratch,
     /// Each vertex's roadmap distance to the nearest of the graph search's targets (infinite
-    /// when none is joined to it), computed by one search from them when edges were added
-    /// since: the search's heuristic. Removing an edge can only lengthen distances, so between
-    /// additions these stay a consistent lower bound.
+    /// when none is joined to it), computed by one search from them and lowered over the edges
+    /// added since ([`Roadmap::update_to_target`]): the search's heuristic. Removing an edge
+    /// can only lengthen distances, so these stay a consistent lower bound.
     to_target: Vec<f64>,
+    /// Edges added since `to_target` was computed (each once, as its two ends and length):
+    /// what [`Roadmap::update_to_target`] lowers the distances over.
+    fresh: Vec<(u32, u32, f64)>,
     /// `edges_added` and the targets when `to_target` was computed.
     to_target_of: Option<(u64, Vec<u32>)>,
     /// Edges added to the roadmap so far.
@@ -312,6 +315,7 @@ impl Roadmap {
             scratch: SearchScratch::default(),
             to_target: Vec::new(),
             to_target_of: None,
+            fresh: Vec::new(),
             edges_added: 0,
             near: Vec::new(),
             wedged: [Vec::new(), Vec::new()],
@@ -380,6 +384,7 @@ impl Roadmap {
             let d = space.distance(self.nn.state(from as usize), q);
             self.adjacency[from as usize].push((v, d));
             self.adjacency[v as usize].push((from, d));
+            self.fresh.push((from, v, d));
             self.edges_added += 1;
         }
         self.valid_edges.insert(edge(from, v));
@@ -423,6 +428,7 @@ impl Roadmap {
             }
         }
         self.edges_added += adjacent.len() as u64;
+        self.fresh.extend(adjacent.iter().map(|&(u, d)| (u, v, d)));
         self.adjacency.push(adjacent);
         self.near = near;
         v
@@ -444,6 +450,7 @@ impl Roadmap {
             if d <= range {
                 self.adjacency[v as usize].push((u, d));
                 self.adjacency[u as usize].push((v, d));
+                self.fresh.push((u, v, d));
                 self.edges_added += 1;
             }
         }
@@ -460,42 +467,95 @@ impl Roadmap {
         self.adjacency[b as usize].retain(|&(w, _)| w != a);
     }
 
+    /// Whether `to_target` holds the distances to `targets` with every edge added so far.
+    fn to_target_current(&self, targets: &[u32]) -> bool {
+        self.to_target_of
+            .as_ref()
+            .is_some_and(|(added, t)| *added == self.edges_added && t == targets)
+    }
+
     /// Fills `to_target` with every vertex's roadmap distance to the nearest of `targets`
     /// (Dijkstra from them), unless no edge was added since it was last computed for them.
+    /// For the same targets and fewer new edges than vertices, the distances are lowered over
+    /// the new edges instead ([`Roadmap::lower_to_target`]).
     fn update_to_target(&mut self, targets: &[u32]) {
-        let current = self
-            .to_target_of
-            .as_ref()
-            .is_some_and(|(added, t)| *added == self.edges_added && t == targets);
-        if current {
+        if self.to_target_current(targets) {
             return;
         }
+        let same_targets = self.to_target_of.as_ref().is_some_and(|(_, t)| t == targets);
+        if same_targets && self.fresh.len() < self.adjacency.len() {
+            self.lower_to_target();
+        } else {
+            let Self {
+                adjacency,
+                scratch,
+                to_target,
+                ..
+            } = self;
+            to_target.clear();
+            to_target.resize(adjacency.len(), f64::INFINITY);
+            scratch.best_first(
+                adjacency,
+                targets,
+                |_, c| Some(c),
+                |v, c| {
+                    to_target[v as usize] = c;
+                    false
+                },
+            );
+        }
+        self.fresh.clear();
+        self.to_target_of = Some((self.edges_added, targets.to_vec()));
+    }
+
+    /// Lowers `to_target` over the edges added since it was computed: each new edge that
+    /// shortens the way to the targets for one of its ends, and from there every neighbour it
+    /// shortens in turn, in order of distance (Dijkstra from the changed vertices). Distances
+    /// only fall, and only along roadmap edges, so what they held stays true: a consistent
+    /// lower bound on each vertex's distance, 0 at the targets (removed edges can only
+    /// lengthen the true distances). Vertices added since start unreached.
+    fn lower_to_target(&mut self) {
         let Self {
             adjacency,
             scratch,
             to_target,
+            fresh,
             ..
         } = self;
-        to_target.clear();
         to_target.resize(adjacency.len(), f64::INFINITY);
-        scratch.best_first(
-            adjacency,
-            targets,
-            |_, c| Some(c),
-            |v, c| {
-                to_target[v as usize] = c;
-                false
-            },
-        );
-        self.to_target_of = Some((self.edges_added, targets.to_vec()));
+        let open = &mut scratch.open;
+        open.clear();
+        for &(a, b, d) in fresh.iter() {
+            for (x, y) in [(a, b), (b, a)] {
+                let c = to_target[x as usize] + d;
+                if c < to_target[y as usize] {
+                    to_target[y as usize] = c;
+                    open.push(Reverse((order_key(c), y)));
+                }
+            }
+        }
+        while let Some(Reverse((key, v))) = open.pop() {
+            let cv = to_target[v as usize];
+            // (A vertex lowered again after it was queued is handled at its lower entry.)
+            if order_key(cv) != key {
+                continue;
+            }
+            for &(u, d) in &adjacency[v as usize] {
+                let c = cv + d;
+                if c < to_target[u as usize] {
+                    to_target[u as usize] = c;
+                    open.push(Reverse((order_key(c), u)));
+                }
+            }
+        }
     }
 
     /// A roadmap path from one of `sources` to one of `targets`, at most `weight` times longer
     /// than the shortest, or `None` (weighted A*). The heuristic is each vertex's distance to
-    /// the targets in the roadmap as it was when edges were last added
+    /// the targets over every edge the roadmap has had since they were last computed afresh
     /// ([`Roadmap::update_to_target`]): exact until an edge fails, a lower bound after, and
-    /// infinite where no target can be reached, so a search from sources cut off from the
-    /// targets ends at once.
+    /// infinite where no target was ever reachable, so a search from sources that were always
+    /// cut off from the targets (a wedged goal's part) ends at once.
     fn search(&mut self, sources: &[u32], targets: &[u32], weight: f64) -> Option<Vec<u32>> {
         self.update_to_target(targets);
         let Self {
@@ -928,5 +988,66 @@ mod tests {
         roadmap.remove_edge(id(1, 1), id(2, 1));
         assert_eq!(roadmap.search(&[start], &[goal], 1.5), None);
         assert_eq!(roadmap.search(&[goal], &[start], 1.5), None);
+    }
+
+    /// The distances to the targets by a fresh Dijkstra search over the roadmap as it is.
+    fn exact_to_target(roadmap: &Roadmap, targets: &[u32]) -> Vec<f64> {
+        let mut fresh = roadmap.clone();
+        fresh.to_target_of = None;
+        fresh.update_to_target(targets);
+        fresh.to_target
+    }
+
+    #[test]
+    fn lowered_distances_stay_exact_while_edges_are_only_added_and_a_consistent_bound_after() {
+        use rand::SeedableRng;
+        let space = JointSpace::new(&[0.0; 2], &[10.0; 2], &[false; 2]).unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+        let mut roadmap = Roadmap::new(2);
+        let mut q = [0.0; 2];
+        for _ in 0..40 {
+            space.sample(&mut rng, &mut q);
+            roadmap.add(&space, &q, 6, 2.5);
+        }
+        let targets = [0u32, 1];
+        roadmap.update_to_target(&targets);
+        let mut lowered = 0;
+        for batch in 0..30 {
+            // Batches of new vertices (fewer new edges than vertices: the distances are lowered).
+            for _ in 0..3 {
+                space.sample(&mut rng, &mut q);
+                roadmap.add(&space, &q, 6, 2.5);
+            }
+            if roadmap.fresh.len() < roadmap.adjacency.len() {
+                lowered += 1;
+            }
+            roadmap.update_to_target(&targets);
+            assert!(roadmap.fresh.is_empty());
+            let exact = exact_to_target(&roadmap, &targets);
+            if batch < 10 {
+                // Only additions so far: the lowered distances are the exact ones.
+                for (v, (&h, &e)) in roadmap.to_target.iter().zip(&exact).enumerate() {
+                    assert!(
+                        h == e || (h - e).abs() <= 1e-9 * e,
+                        "batch {batch}, vertex {v}: {h} against {e}"
+                    );
+                }
+            } else {
+                // Edges are removed from here on: still at most the exact distance, consistent
+                // along every edge, and 0 at the targets.
+                for (u, (&h, &e)) in roadmap.to_target.iter().zip(&exact).enumerate() {
+                    assert!(h <= e + 1e-9, "batch {batch}, vertex {u}: {h} above {e}");
+                    for &(w, d) in &roadmap.adjacency[u] {
+                        assert!(h <= d + roadmap.to_target[w as usize] + 1e-9, "edge {u}-{w}");
+                    }
+                }
+                assert!(targets.iter().all(|&t| roadmap.to_target[t as usize] == 0.0));
+                let v = rng.random_range(0..roadmap.adjacency.len());
+                if let Some(&(w, _)) = roadmap.adjacency[v].first() {
+                    roadmap.remove_edge(v as u32, w);
+                }
+            }
+        }
+        assert!(lowered >= 20, "the distances were lowered in {lowered} of 30 batches");
     }
 }
