@@ -48,9 +48,9 @@ pub struct LazyPrmSettings {
     /// Samples near a failure lie within this distance of it; `None` is 0.4 × `range`.
     pub enhance_radius: Option<f64>,
     /// Weight of the A* heuristic (default 1.5, at least 1; the heuristic is each vertex's
-    /// roadmap distance to the search's far end, from one Dijkstra search after edges were
-    /// added; the search runs from the start, or from the goals while only their part of the
-    /// roadmap is wedged, see [`LazyPrmSettings::tree_share`]):
+    /// roadmap distance to the search's far end, from a Dijkstra search, lowered over the
+    /// edges added since; the search runs from the start, or from the goals while only their
+    /// part of the roadmap is wedged, see [`LazyPrmSettings::tree_share`]):
     /// candidate paths are at most this many times longer than the roadmap's shortest, and
     /// each search expands fewer vertices.
     /// A search runs after every candidate that fails its checks, so on large roadmaps the
@@ -65,6 +65,17 @@ pub struct LazyPrmSettings {
     /// goal between shelf boards, whose long lazy edges all fail, otherwise gets about `k`
     /// new edge attempts per batch however large the batch.
     pub tree_share: f64,
+    /// The share of each batch spent growing a wedged query end once the roadmap holds
+    /// [`LazyPrmSettings::late_roadmap`] vertices (default 0.99, in [0, 1]; equal to
+    /// `tree_share` to keep one share; unused when `tree_share` is 0, which turns the growth
+    /// off). By then a wedged end's way out is what is missing,
+    /// and each uniform sample added costs a neighbour query over the whole roadmap (about
+    /// half of a lost plan's time on the Fetch's bookshelves). On MotionBenchMaker's Fetch
+    /// bookshelf_small, bookshelf_thin and cage, seeds 0–2, 1 s: 696 of 720 solved against
+    /// 689 with 0.9 throughout (`docs/planning-log.md`, forty-second round).
+    pub late_tree_share: f64,
+    /// Roadmap size from which [`LazyPrmSettings::late_tree_share`] applies (default 4,096).
+    pub late_roadmap: usize,
     /// Step of the wedged-end growth as a fraction of `range` (default 0.25).
     pub tree_step: f64,
     /// The pocket escape for a wedged query end ([`Escape`], as [`BiRrt`](crate::BiRrt)'s):
@@ -86,6 +97,8 @@ impl Default for LazyPrmSettings {
             enhance_radius: None,
             search_weight: 1.5,
             tree_share: 0.9,
+            late_tree_share: 0.99,
+            late_roadmap: 4096,
             tree_step: 0.25,
             escape: Some(Escape::default()),
         }
@@ -738,6 +751,12 @@ impl<S: Space> Planner<S> for LazyPrm {
                 "tree_share is {tree_share}; it must be in [0, 1]"
             )));
         }
+        let late_tree_share = self.settings.late_tree_share;
+        if !(0.0..=1.0).contains(&late_tree_share) {
+            return Err(PlanError::BadInput(format!(
+                "late_tree_share is {late_tree_share}; it must be in [0, 1]"
+            )));
+        }
         let tree_step = self.settings.tree_step * range;
         if !(tree_step.is_finite() && tree_step > 0.0 && self.settings.tree_step <= 1.0) {
             return Err(PlanError::BadInput(format!(
@@ -834,6 +853,11 @@ impl<S: Space> Planner<S> for LazyPrm {
             };
             from_goals = wedged[1] && !wedged[0];
             from_wedged = wedged[0] || wedged[1];
+            let share = if roadmap.nn.len() >= self.settings.late_roadmap {
+                late_tree_share
+            } else {
+                tree_share
+            };
             let mut turn = 0;
             for _ in 0..grow {
                 if !run.next() {
@@ -841,7 +865,7 @@ impl<S: Space> Planner<S> for LazyPrm {
                 }
                 let space = motion.space();
                 space.sample(rng, &mut sample);
-                if (wedged[0] || wedged[1]) && rng.random_bool(tree_share) {
+                if (wedged[0] || wedged[1]) && rng.random_bool(share) {
                     // An RRT step of the wedged part (the two take turns when both are), or, once
                     // the part is stuck, a turn of its escape helper.
                     turn = if wedged[0] && wedged[1] {

@@ -967,7 +967,7 @@ fn bad_input_is_named() {
         f(&mut s);
         s
     };
-    let cases: [(LazyPrmSettings, &str); 11] = [
+    let cases: [(LazyPrmSettings, &str); 13] = [
         (with(|s| s.enhance = 1.5), "enhance is 1.5"),
         (with(|s| s.enhance = f64::NAN), "enhance is NaN"),
         (with(|s| s.enhance_radius = Some(0.0)), "enhance_radius is 0"),
@@ -979,6 +979,8 @@ fn bad_input_is_named() {
         (with(|s| s.search_weight = f64::NAN), "search_weight is NaN"),
         (with(|s| s.tree_share = -0.1), "tree_share is -0.1"),
         (with(|s| s.tree_share = f64::NAN), "tree_share is NaN"),
+        (with(|s| s.late_tree_share = 1.01), "late_tree_share is 1.01"),
+        (with(|s| s.late_tree_share = f64::NAN), "late_tree_share is NaN"),
         (with(|s| s.tree_step = 0.0), "tree_step is 0"),
         (with(|s| s.tree_step = 1.5), "tree_step is 1.5"),
         (with(|s| s.tree_step = f64::NAN), "tree_step is NaN"),
@@ -1433,6 +1435,32 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
         &request,
         &budget(40_000),
     );
+    // The late share replaces the share once the roadmap holds `late_roadmap` vertices: from
+    // the first vertex, a late share of 0.6 plans as a share of 0.6 does, check for check.
+    let mut run = |settings: LazyPrmSettings| {
+        let mut motion = MotionValidator::new(space.clone(), POCKET_RESOLUTION);
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut prm = LazyPrm::new(LazyPrmSettings {
+            range: Some(0.4),
+            ..settings
+        });
+        let out = prm.plan(&mut motion, &mut v, &request, &budget(40_000), &mut rng);
+        out.map(|s| (s.stats.iterations, s.stats.states_checked, s.path.states))
+    };
+    let early = run(LazyPrmSettings {
+        tree_share: 0.6,
+        late_roadmap: usize::MAX,
+        ..Default::default()
+    });
+    let late = run(LazyPrmSettings {
+        late_tree_share: 0.6,
+        late_roadmap: 0,
+        ..Default::default()
+    });
+    assert!(early.is_ok(), "{early:?}");
+    assert_eq!(early, late);
+    let default = run(LazyPrmSettings::default());
+    assert_ne!(default.map(|(i, c, _)| (i, c)), early.map(|(i, c, _)| (i, c)));
 }
 
 /// One coordinate of a request: inside the square, on or beyond its edges, or not a number.
