@@ -68,11 +68,11 @@ pub struct LazyPrmSettings {
     /// The share of each batch spent growing a wedged query end once the roadmap holds
     /// [`LazyPrmSettings::late_roadmap`] vertices (default 0.99, in [0, 1]; equal to
     /// `tree_share` to keep one share; unused when `tree_share` is 0, which turns the growth
-    /// off). By then a wedged end's way out is what is missing,
-    /// and each uniform sample added costs a neighbour query over the whole roadmap (about
-    /// half of a lost plan's time on the Fetch's bookshelves). On MotionBenchMaker's Fetch
-    /// bookshelf_small, bookshelf_thin and cage, seeds 0–2, 1 s: 696 of 720 solved against
-    /// 689 with 0.9 throughout (`docs/planning-log.md`, forty-second round).
+    /// off). By then a wedged end's way out is what is missing, and each uniform sample added
+    /// costs a neighbour query over the whole roadmap (about half of a lost plan's time on the
+    /// Fetch's bookshelves). On MotionBenchMaker's Fetch bookshelf_small, bookshelf_thin and
+    /// cage, seeds 0–2, 1 s: 696 of 720 solved against 689 with 0.9 throughout
+    /// (`docs/planning-log.md`, forty-second round).
     pub late_tree_share: f64,
     /// Roadmap size from which [`LazyPrmSettings::late_tree_share`] applies (default 4,096).
     pub late_roadmap: usize,
