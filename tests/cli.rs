@@ -394,32 +394,20 @@ fn bench_kin_writes_json() {
 
 #[test]
 fn bench_plan_refuses_unreadable_and_empty_inputs() {
-    let missing = std::env::temp_dir().join(format!("hearth_cli_missing_{}.json", std::process::id()));
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-        .args(["bench", "plan", "--problems", missing.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let empty = temp_dir("plan_empty");
+    let missing = empty.join("missing.json");
+    let err = fails(&["bench", "plan", "--problems", missing.to_str().unwrap()]);
     // The I/O error's message appears once, after the file's name.
-    assert!(!o.status.success() && err.contains("cannot read"), "{err}");
+    assert!(err.contains("cannot read"), "{err}");
     assert_eq!(err.matches("os error 2").count(), 1, "{err}");
     // A folder without problem files, and a file with an empty list, plan nothing: an error.
-    let empty = std::env::temp_dir().join(format!("hearth_cli_empty_{}", std::process::id()));
-    std::fs::create_dir_all(&empty).unwrap();
+    let err = fails(&["bench", "plan", "--problems", empty.to_str().unwrap()]);
+    assert!(err.contains("no problems to plan in"), "{err}");
     let file = empty.join("none.json");
-    std::fs::write(
-        &file,
-        r#"{"robot": "panda", "family": "f", "joint_names": ["panda_joint1"], "problems": []}"#,
-    )
-    .unwrap();
-    for given in [&empty, &file] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hearth"))
-            .args(["bench", "plan", "--problems", given.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success() && err.contains("no problems to plan in"), "{err}");
-    }
+    let none = r#"{"robot": "panda", "family": "f", "joint_names": ["panda_joint1"], "problems": []}"#;
+    std::fs::write(&file, none).unwrap();
+    let err = fails(&["bench", "plan", "--problems", file.to_str().unwrap()]);
+    assert!(err.contains("no problems to plan in"), "{err}");
     std::fs::remove_dir_all(&empty).unwrap();
 }
 
