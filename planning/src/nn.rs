@@ -13,7 +13,8 @@
 //! 3 µs, against 7 µs with the cells' split planes alone. Trees of up to a few hundred
 //! states, trees of up to 2,048 far from the query, and, for a k-nearest query, trees of up
 //! to 4,096 are scanned instead of descended: an f32 copy of their weighted states, eight per
-//! step, filters with a bound widened past its rounding, and the space's distance decides. All give the exact answer, ties broken by id.
+//! step, filters with a bound widened past its rounding, and the space's distance decides.
+//! All give the exact answer, ties broken by id.
 //! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
 //! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
 //! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`

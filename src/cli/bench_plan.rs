@@ -464,29 +464,29 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         Connect::Other => "other",
                         Connect::Onward => "onward",
                     };
-                    format!("; BiRRT step {range}, {connect} connection")
+                    format!("BiRRT step {range}, {connect} connection")
                 }
                 PlannerKind::Rrt => {
                     let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
                     let range = step_text(rrt.range);
                     format!(
-                        "; RRT step {range}, goal zone {} within {} of the step",
+                        "RRT step {range}, goal zone {} within {} of the step",
                         rrt.goal_zone, rrt.goal_zone_radius
                     )
                 }
                 PlannerKind::Lazyprm => {
                     let range = step_text(lazyprm_range(&set.robot, a.range));
-                    format!("; LazyPRM step {range}")
+                    format!("LazyPRM step {range}")
                 }
             };
-            let racing = if a.threads > 1 {
-                format!("; {} copies racing per plan", a.threads)
-            } else {
-                String::new()
-            };
+            let racing = (a.threads > 1).then(|| format!("{} copies racing per plan", a.threads));
             // (Without a joints file next to the problems there is no note.)
-            let about = format!("{}{step}{racing}", s.note);
-            eprintln!("{}: {}", set.robot, about.trim_start_matches("; "));
+            let about: Vec<&str> = [Some(s.note.as_str()), Some(step.as_str()), racing.as_deref()]
+                .into_iter()
+                .flatten()
+                .filter(|part| !part.is_empty())
+                .collect();
+            eprintln!("{}: {}", set.robot, about.join("; "));
             if a.warm_up > 0 {
                 let mut v =
                     RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));

@@ -866,9 +866,7 @@ impl Trajectory {
     /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
     /// time step to the local speed; a `resolution` that is not positive and finite is refused.
     fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) -> Result<(), TrajectoryError> {
-        if positive(resolution).is_none() {
-            return Err(TrajectoryError::BadResolution { value: resolution });
-        }
+        usable_resolution(resolution)?;
         discretise_timed(
             self.dim,
             self.duration(),
@@ -919,9 +917,7 @@ impl Trajectory {
         validator: &mut V,
         resolution: f64,
     ) -> Result<(), TrajectoryError> {
-        if positive(resolution).is_none() {
-            return Err(TrajectoryError::BadResolution { value: resolution });
-        }
+        usable_resolution(resolution)?;
         let mut flat = Vec::new();
         let mut times = Vec::new();
         let sample = |t: f64, q: &mut [f64]| self.sample(t, q, None);
@@ -994,6 +990,14 @@ impl Trajectory {
 /// The share of the spacing that [`discretise_timed`] aims its steps at: close to 1 for few
 /// states, below it so that a slightly faster next step still lands within the spacing.
 const SPACING_AIM: f64 = 0.96;
+
+/// [`TrajectoryError::BadResolution`] unless `resolution` is positive and finite: the check
+/// every sampling of a whole trajectory makes before it samples.
+fn usable_resolution(resolution: f64) -> Result<(), TrajectoryError> {
+    positive(resolution)
+        .map(|_| ())
+        .ok_or(TrajectoryError::BadResolution { value: resolution })
+}
 
 /// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
 /// consecutive ones at most `resolution` apart, to `out` (and their times to `times`). Each
