@@ -567,6 +567,14 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         row["success"] = json!(false);
                         row["error"] = json!(e.to_string());
                         row["checks"] = json!(v.checks() - before);
+                        // A plan cut off by its budget reports what it did, in the fields a
+                        // solved plan has (the summary's medians read solved plans only).
+                        if let hearth_planning::PlanError::Timeout { stats } = &e {
+                            row["plan_time_s"] = json!(stats.time.as_secs_f64());
+                            row["plan_checks"] = json!(stats.states_checked);
+                            row["iterations"] = json!(stats.iterations);
+                            row["tree_sizes"] = json!(stats.tree_sizes);
+                        }
                     }
                     Ok(sol) => {
                         row["plan_time_s"] = json!(sol.stats.time.as_secs_f64());
