@@ -577,3 +577,88 @@ fn cylinder_against_box_agrees_with_parry_near_contact() {
         "degenerate test: {hits} hits, {misses} misses"
     );
 }
+
+/// Obstacles that parry would take and then answer for wrongly are refused by
+/// `ParryScene::try_new`, naming the obstacle and its defect; good ones build the same scene
+/// as `ParryScene::new`.
+#[test]
+fn try_new_refuses_obstacles_that_would_answer_wrongly() {
+    use hearth_planning::obstacles::ObstacleDefect;
+    use parry3d::math::Vector;
+    let ok = || Obstacle::ball("ok", Vector::new(0.0, 2.0, 0.0), 0.1);
+    let nan_point = [Vector::ZERO, Vector::X, Vector::Y, Vector::new(0.0, 0.0, Real::NAN)];
+    let cases: Vec<(Obstacle, ObstacleDefect)> = vec![
+        (
+            Obstacle::cuboid("nan", at(Real::NAN, 0.0, 0.0), Vector::splat(0.1)),
+            ObstacleDefect::Pose,
+        ),
+        (
+            Obstacle::cuboid(
+                "scaled",
+                Pose::from_parts(Vector::ZERO, Rotation::from_xyzw(0.0, 0.0, 0.0, 2.0)),
+                Vector::splat(0.1),
+            ),
+            ObstacleDefect::Rotation { norm: 2.0 },
+        ),
+        (
+            Obstacle::cuboid("inside out", at(1.0, 0.0, 0.0), Vector::new(0.1, 0.1, -0.1)),
+            ObstacleDefect::Size {
+                what: "half-extent",
+                value: -0.1,
+            },
+        ),
+        (
+            Obstacle::ball("huge", Vector::ZERO, Real::INFINITY),
+            ObstacleDefect::Size {
+                what: "radius",
+                value: Real::INFINITY,
+            },
+        ),
+        (
+            Obstacle::cylinder("can", at(0.0, 0.0, 0.0), -0.05, 0.03),
+            ObstacleDefect::Size {
+                what: "half-length",
+                value: -0.05,
+            },
+        ),
+        (
+            Obstacle::capsule("rail", Vector::ZERO, Vector::X, -0.01),
+            ObstacleDefect::Size {
+                what: "radius",
+                value: -0.01,
+            },
+        ),
+    ];
+    for (bad, defect) in cases {
+        let name = bad.name.clone();
+        assert_eq!(bad.check(), Err(defect), "{name}");
+        let e = ParryScene::try_new(vec![ok(), bad]).unwrap_err();
+        assert_eq!((e.index, e.name.as_str(), e.defect), (1, name.as_str(), defect));
+        assert!(
+            e.to_string().starts_with(&format!("obstacle 1 ({name:?}): its ")),
+            "{e}"
+        );
+    }
+    // A hull of a non-finite point: parry builds none, or one whose bounds are not finite.
+    if let Some(hull) = Obstacle::convex_hull("hull", Pose::IDENTITY, &nan_point) {
+        assert!(hull.check().is_err());
+    }
+    // Zero sizes (points, flat boxes) and a quaternion within rounding of unit are fine.
+    let fine = vec![
+        ok(),
+        Obstacle::ball("point", Vector::ZERO, 0.0),
+        Obstacle::cuboid("sheet", at(0.0, 0.0, 1.0), Vector::new(0.5, 0.5, 0.0)),
+        Obstacle::cuboid(
+            "turned",
+            Pose::from_parts(Vector::ZERO, Rotation::from_xyzw(0.0, 0.0, 0.3827, 0.9239)),
+            Vector::splat(0.1),
+        ),
+    ];
+    let scene = ParryScene::try_new(fine.clone()).unwrap();
+    let plain = ParryScene::new(fine);
+    assert_eq!(scene.obstacles().len(), 4);
+    let probe = point();
+    for p in [at(0.0, 2.0, 0.0), at(0.0, 0.0, 1.0), at(0.5, 0.5, 0.5)] {
+        assert_eq!(scene.first_hit(&probe, &p), plain.first_hit(&probe, &p));
+    }
+}

@@ -90,6 +90,11 @@ fn usable(set: &ProblemSet) -> Result<(), String> {
             }
         }
         let scene = p.scene();
+        // What the loader accepts, the scene's own check accepts too.
+        for o in scene.obstacles() {
+            o.check()
+                .map_err(|e| format!("obstacle {:?} fails its check: {e}", o.name))?;
+        }
         if let Some(b) = scene.aabb()
             && !(b.mins.is_finite() && b.maxs.is_finite())
         {

@@ -453,7 +453,13 @@ impl Obstacle {
     pub fn cylinder(name: impl Into<String>, pose: Pose, half_length: Real, radius: Real) -> Self {
         // R_x(+90°) maps local y (parry's axis) onto local z.
         let y_to_z = Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2);
-        Self::new(name, SharedShape::cylinder(half_length, radius), pose * y_to_z)
+        // Built field by field: parry's `Cylinder::new` panics on a negative size, which
+        // `check` reports instead.
+        let cylinder = parry3d::shape::Cylinder {
+            half_height: half_length,
+            radius,
+        };
+        Self::new(name, SharedShape::new(cylinder), pose * y_to_z)
     }
 
     /// A capsule (segment `a`–`b` in world coordinates, swept by a ball of `radius`).
@@ -532,4 +538,113 @@ impl Obstacle {
     pub fn aabb(&self) -> Aabb {
         self.shape.compute_aabb(&self.pose)
     }
+
+    /// Checks that the obstacle describes a solid that collision queries can answer for: a
+    /// finite pose whose rotation is a unit quaternion, finite sizes that are not negative
+    /// (box half-extents, ball, cylinder, cone and capsule radii, half-lengths), and a finite
+    /// bounding box. parry takes such input without complaint and then answers queries wrongly
+    /// (a NaN pose puts its bounding box everywhere); [`ParryScene::try_new`] runs this check
+    /// on every obstacle.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleDefect};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// assert_eq!(Obstacle::ball("ok", Vector::ZERO, 0.1).check(), Ok(()));
+    /// let nan = Obstacle::cuboid("nan", Pose::translation(f32::NAN, 0.0, 0.0), Vector::splat(0.1));
+    /// assert_eq!(nan.check(), Err(ObstacleDefect::Pose));
+    /// let inside_out = Obstacle::cuboid("box", Pose::IDENTITY, Vector::new(0.1, -0.2, 0.1));
+    /// assert_eq!(inside_out.check(), Err(ObstacleDefect::Size { what: "half-extent", value: -0.2 }));
+    /// ```
+    ///
+    /// # Errors
+    /// The first [`ObstacleDefect`] found.
+    pub fn check(&self) -> Result<(), ObstacleDefect> {
+        let (t, q) = (self.pose.translation, self.pose.rotation);
+        if !t.is_finite() || !q.is_finite() {
+            return Err(ObstacleDefect::Pose);
+        }
+        let norm = q.length();
+        if (norm - 1.0).abs() > 1e-3 {
+            return Err(ObstacleDefect::Rotation { norm });
+        }
+        let sizes: Vec<(&'static str, Real)> = if let Some(c) = self.shape.as_cuboid() {
+            c.half_extents.to_array().map(|v| ("half-extent", v)).to_vec()
+        } else if let Some(b) = self.shape.as_ball() {
+            vec![("radius", b.radius)]
+        } else if let Some(c) = self.shape.as_cylinder() {
+            vec![("half-length", c.half_height), ("radius", c.radius)]
+        } else if let Some(c) = self.shape.as_cone() {
+            vec![("half-length", c.half_height), ("radius", c.radius)]
+        } else if let Some(c) = self.shape.as_capsule() {
+            vec![("radius", c.radius)]
+        } else {
+            Vec::new()
+        };
+        if let Some(&(what, value)) = sizes.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
+            return Err(ObstacleDefect::Size { what, value });
+        }
+        let aabb = self.aabb();
+        if !aabb.mins.is_finite() || !aabb.maxs.is_finite() || aabb.mins.cmpgt(aabb.maxs).any() {
+            return Err(ObstacleDefect::Bounds);
+        }
+        Ok(())
+    }
+}
+
+/// What is wrong with an [`Obstacle`] ([`Obstacle::check`]).
+///
+/// ```
+/// use hearth_planning::obstacles::ObstacleDefect;
+/// assert_eq!(ObstacleDefect::Pose.to_string(), "its pose is not finite");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum ObstacleDefect {
+    /// The pose's translation or rotation holds a NaN or an infinity.
+    #[error("its pose is not finite")]
+    Pose,
+    /// The rotation is not a unit quaternion (it would scale the shape).
+    #[error("its rotation is not a unit quaternion (norm {norm})")]
+    Rotation {
+        /// The quaternion's norm.
+        norm: Real,
+    },
+    /// A size of the shape is negative or not finite.
+    #[error("its {what} is {value}, not a finite size of 0 or more")]
+    Size {
+        /// Which size (`half-extent`, `radius`, `half-length`).
+        what: &'static str,
+        /// Its value.
+        value: Real,
+    },
+    /// The shape's bounding box is not finite (a mesh or hull with non-finite points, for
+    /// example).
+    #[error("its bounding box is not finite")]
+    Bounds,
+}
+
+/// An obstacle that [`ParryScene::try_new`] refused: its position in the list, its name and
+/// its defect.
+///
+/// ```
+/// use hearth_planning::obstacles::{Obstacle, ParryScene};
+/// use parry3d::math::Vector;
+///
+/// let e = ParryScene::try_new(vec![
+///     Obstacle::ball("ok", Vector::ZERO, 0.1),
+///     Obstacle::ball("bad", Vector::X, -0.1),
+/// ])
+/// .unwrap_err();
+/// assert_eq!((e.index, e.name.as_str()), (1, "bad"));
+/// assert_eq!(e.to_string(), "obstacle 1 (\"bad\"): its radius is -0.1, not a finite size of 0 or more");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("obstacle {index} ({name:?}): {defect}")]
+pub struct ObstacleError {
+    /// Position of the obstacle in the list given.
+    pub index: usize,
+    /// The obstacle's name.
+    pub name: String,
+    /// What is wrong with it.
+    pub defect: ObstacleDefect,
 }

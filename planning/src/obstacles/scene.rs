@@ -11,7 +11,7 @@ use std::ops::{Add, Mul, Sub};
 use wide::f32x8;
 
 use super::gjk::{self, Convex};
-use super::{BallBatch, Obstacle, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
+use super::{BallBatch, Obstacle, ObstacleError, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
 
 /// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
 /// time) instead of descending the BVH.
@@ -68,6 +68,10 @@ pub struct ParryScene {
 impl ParryScene {
     /// Builds the scene and its BVH. Obstacle `i` gets [`ObstacleId`]`(i)`.
     ///
+    /// The obstacles are taken as they are: an obstacle with a NaN pose or a negative size
+    /// makes queries answer wrongly. For geometry that comes from outside the program (a
+    /// file, a sensor), build with [`ParryScene::try_new`], which refuses such obstacles.
+    ///
     /// ```
     /// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
     /// use parry3d::math::{Pose, Vector};
@@ -95,6 +99,34 @@ impl ParryScene {
             bounds,
             margin: 0.0,
         }
+    }
+
+    /// Builds the scene after [`Obstacle::check`]ing every obstacle; the first defect found is
+    /// returned with the obstacle's position and name, and no scene is built.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleDefect, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    ///
+    /// let table = Obstacle::cuboid("table", Pose::translation(0.5, 0.0, 0.4), Vector::new(0.3, 0.6, 0.02));
+    /// assert_eq!(ParryScene::try_new(vec![table.clone()])?.obstacles().len(), 1);
+    /// let lost = Obstacle::cuboid("lost", Pose::translation(0.0, f32::INFINITY, 0.0), Vector::splat(0.1));
+    /// let e = ParryScene::try_new(vec![table, lost]).unwrap_err();
+    /// assert_eq!((e.index, e.defect), (1, ObstacleDefect::Pose));
+    /// # Ok::<(), hearth_planning::obstacles::ObstacleError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`ObstacleError`] for the first obstacle whose check fails.
+    pub fn try_new(obstacles: Vec<Obstacle>) -> Result<Self, ObstacleError> {
+        for (index, o) in obstacles.iter().enumerate() {
+            o.check().map_err(|defect| ObstacleError {
+                index,
+                name: o.name.clone(),
+                defect,
+            })?;
+        }
+        Ok(Self::new(obstacles))
     }
 
     /// Sets the collision margin (see the type's docs). Negative or non-finite values count as 0.
