@@ -628,6 +628,15 @@ fn try_new_refuses_obstacles_that_would_answer_wrongly() {
                 value: -0.01,
             },
         ),
+        // A bounding box of min and max passes over a NaN end: the ends are checked.
+        (
+            Obstacle::capsule("bent rail", Vector::new(0.0, Real::NAN, 0.0), Vector::X, 0.01),
+            ObstacleDefect::Bounds,
+        ),
+        (
+            Obstacle::cuboid("far", at(2e6, 0.0, 0.0), Vector::splat(1.0)),
+            ObstacleDefect::Extent { reach: 2e6 + 1.0 },
+        ),
     ];
     for (bad, defect) in cases {
         let name = bad.name.clone();

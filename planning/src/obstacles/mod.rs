@@ -541,8 +541,9 @@ impl Obstacle {
 
     /// Checks that the obstacle describes a solid that collision queries can answer for: a
     /// finite pose whose rotation is a unit quaternion, finite sizes that are not negative
-    /// (box half-extents, ball, cylinder, cone and capsule radii, half-lengths), and a finite
-    /// bounding box. parry takes such input without complaint and then answers queries wrongly
+    /// (box half-extents, ball, cylinder, cone and capsule radii, half-lengths), finite points
+    /// (a capsule's segment, a hull's or a mesh's vertices) and a bounding box within
+    /// 1,000 km of the origin. parry takes such input without complaint and then answers queries wrongly
     /// (a NaN pose puts its bounding box everywhere); [`ParryScene::try_new`] runs this check
     /// on every obstacle.
     ///
@@ -584,9 +585,28 @@ impl Obstacle {
         if let Some(&(what, value)) = sizes.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
             return Err(ObstacleDefect::Size { what, value });
         }
+        // Points that shape the solid: a bounding box of min and max can pass over a NaN.
+        let points: &[Vector] = if let Some(c) = self.shape.as_capsule() {
+            &[c.segment.a, c.segment.b]
+        } else if let Some(h) = self.shape.as_convex_polyhedron() {
+            h.points()
+        } else if let Some(m) = self.shape.as_trimesh() {
+            m.vertices()
+        } else {
+            &[]
+        };
+        if !points.iter().all(|p| p.is_finite()) {
+            return Err(ObstacleDefect::Bounds);
+        }
         let aabb = self.aabb();
         if !aabb.mins.is_finite() || !aabb.maxs.is_finite() || aabb.mins.cmpgt(aabb.maxs).any() {
             return Err(ObstacleDefect::Bounds);
+        }
+        // f32 queries lose their precision (and squared lengths overflow) far beyond any
+        // real scene: the limit benchmark problem files have too.
+        let reach = aabb.mins.abs().max(aabb.maxs.abs()).max_element();
+        if f64::from(reach) > crate::problem::MAX_EXTENT {
+            return Err(ObstacleDefect::Extent { reach });
         }
         Ok(())
     }
@@ -617,10 +637,18 @@ pub enum ObstacleDefect {
         /// Its value.
         value: Real,
     },
-    /// The shape's bounding box is not finite (a mesh or hull with non-finite points, for
-    /// example).
-    #[error("its bounding box is not finite")]
+    /// The shape's bounding box, or a point that shapes it (a capsule's segment ends, a
+    /// hull's or a mesh's vertices), is not finite.
+    #[error("its shape has a point or bound that is not finite")]
     Bounds,
+    /// The shape reaches farther from the origin than
+    /// [`MAX_EXTENT`](crate::problem::MAX_EXTENT) (1,000 km), where f32 queries lose their
+    /// precision.
+    #[error("its bounding box reaches {reach} m from the origin, beyond the 1,000 km that queries can answer for")]
+    Extent {
+        /// The largest coordinate of its bounding box, in metres.
+        reach: Real,
+    },
 }
 
 /// An obstacle that [`ParryScene::try_new`] refused: its position in the list, its name and
