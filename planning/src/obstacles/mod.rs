@@ -541,11 +541,11 @@ impl Obstacle {
 
     /// Checks that the obstacle describes a solid that collision queries can answer for: a
     /// finite pose whose rotation is a unit quaternion, finite sizes that are not negative
-    /// (box half-extents, ball, cylinder, cone and capsule radii, half-lengths), finite points
-    /// (a capsule's segment, a hull's or a mesh's vertices) and a bounding box within
-    /// 1,000 km of the origin. parry takes such input without complaint and then answers queries wrongly
-    /// (a NaN pose puts its bounding box everywhere); [`ParryScene::try_new`] runs this check
-    /// on every obstacle.
+    /// (box half-extents, ball, cylinder, cone and capsule radii, half-lengths), finite
+    /// points (a capsule's segment, a hull's or a mesh's vertices) and a bounding box within
+    /// 1,000 km of the origin. parry takes such input without complaint and then answers
+    /// queries wrongly (a NaN pose puts its bounding box everywhere);
+    /// [`ParryScene::try_new`] runs this check on every obstacle.
     ///
     /// ```
     /// use hearth_planning::obstacles::{Obstacle, ObstacleDefect};
