@@ -10,7 +10,8 @@
 //! 1,000 states packed in a pocket (±0.3 rad) from samples of the whole space;
 //! `nn/k10_4k_fetch` queries the 10 nearest among 4,000 random configurations of the Fetch's
 //! torso and arm (three continuous joints), the size of a LazyPRM roadmap after a few tenths
-//! of a second.
+//! of a second. `queries/…` plans 16 queries between random valid configurations in one
+//! scene: BiRRT, a fresh LazyPRM per query, and one LazyPRM that keeps its roadmap.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -71,6 +72,29 @@ fn fixture() -> Fixture {
     }
 }
 
+/// Plans `queries` in the first problem's scene, with a fresh planner per query or (`keep`)
+/// one planner for the whole sequence; returns how many were solved.
+fn plan_queries<P: Planner<JointSpace>>(
+    f: &mut Fixture,
+    queries: &[PlanRequest],
+    make: impl Fn() -> P,
+    keep: bool,
+) -> usize {
+    let mut motion = MotionValidator::new(f.space.clone(), RESOLUTION);
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    let mut kept = make();
+    let mut solved = 0;
+    for r in queries {
+        if !keep {
+            kept = make();
+        }
+        solved += kept
+            .plan(&mut motion, &mut f.validity[0], r, &Budget::time(1.0), &mut rng)
+            .is_ok() as usize;
+    }
+    solved
+}
+
 fn plan_all<P: Planner<JointSpace>>(f: &mut Fixture, make: impl Fn() -> P) -> usize {
     let mut solved = 0;
     for (v, r) in f.validity.iter_mut().zip(&f.requests) {
@@ -90,6 +114,53 @@ fn planners(c: &mut Criterion) {
     g.bench_function("rrt", |b| b.iter(|| black_box(plan_all(&mut f, Rrt::default))));
     g.bench_function("lazyprm", |b| {
         b.iter(|| black_box(plan_all(&mut f, || LazyPrm::new(LazyPrmSettings::default()))))
+    });
+    g.finish();
+
+    // Many queries in one static scene (the first table_pick problem's): 16 queries between
+    // random valid configurations, each planned by a fresh planner, or by one LazyPRM that
+    // keeps its roadmap from query to query (each iteration starts from an empty roadmap, so
+    // the time is the whole sequence's, roadmap building included).
+    let queries = {
+        use hearth_planning::space::Space;
+        use hearth_planning::validity::StateValidator;
+        let v = &mut f.validity[0];
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+        let mut q = vec![0.0; f.space.dim()];
+        let mut states = Vec::new();
+        while states.len() < 17 {
+            f.space.sample(&mut rng, &mut q);
+            if v.is_valid(&q) {
+                states.push(q.clone());
+            }
+        }
+        states
+            .windows(2)
+            .map(|w| PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone())))
+            .collect::<Vec<_>>()
+    };
+    for (name, keep) in [("BiRRT", false), ("LazyPRM, fresh", false), ("LazyPRM, kept", true)] {
+        let solved = if name == "BiRRT" {
+            plan_queries(&mut f, &queries, BiRrt::default, keep)
+        } else {
+            plan_queries(&mut f, &queries, || LazyPrm::new(LazyPrmSettings::default()), keep)
+        };
+        eprintln!(
+            "queries/panda_table_pick_16: {name} solves {solved} of {}",
+            queries.len()
+        );
+    }
+    let mut g = c.benchmark_group("queries/panda_table_pick_16");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("birrt", |b| {
+        b.iter(|| black_box(plan_queries(&mut f, &queries, BiRrt::default, false)))
+    });
+    let prm = || LazyPrm::new(LazyPrmSettings::default());
+    g.bench_function("lazyprm_fresh", |b| {
+        b.iter(|| black_box(plan_queries(&mut f, &queries, prm, false)))
+    });
+    g.bench_function("lazyprm_kept", |b| {
+        b.iter(|| black_box(plan_queries(&mut f, &queries, prm, true)))
     });
     g.finish();
 
