@@ -9,6 +9,7 @@ use nalgebra::{Isometry3, Point3};
 use parry3d::math::{Real, Vector};
 use parry3d::shape::{Ball, SharedShape};
 
+use crate::error::PlanError;
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 use crate::pair_lanes::PairLanes;
 use crate::reach::{Reach, Row};
@@ -267,7 +268,7 @@ impl std::fmt::Display for Contact {
 /// };
 /// let table = Obstacle::cuboid("table", Pose::translation(0.3, 0.0, 0.15), Vector::new(0.2, 0.2, 0.05));
 /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table])));
-/// v.attach(rod);
+/// v.attach(rod)?;
 /// let over_table = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
 /// let hit = Contact::Obstacle { link: "attached:rod".into(), obstacle: "table".into() };
 /// assert_eq!(v.explain(&over_table), Some(hit));
@@ -933,6 +934,11 @@ impl RobotValidity {
     /// Attaches an object (a held object moves with the gripper). It is checked against the
     /// obstacles and against every link except `link` and links adjacent to it.
     ///
+    /// # Errors
+    /// [`PlanError::BadInput`], with nothing attached, for a link the model does not have,
+    /// an offset that is not finite, or a shape that [`Obstacle::check`](crate::obstacles::Obstacle::check)
+    /// refuses (a negative or non-finite size, a non-finite point).
+    ///
     /// ```
     /// use hearth_planning::kinematics::nalgebra::Isometry3;
     /// use hearth_planning::obstacles::{Obstacle, ParryScene};
@@ -953,12 +959,40 @@ impl RobotValidity {
     /// // A 50 cm rod held in the hand reaches down into the table.
     /// let hand = panda.link_index("panda_hand")?;
     /// let shape = SharedShape::cuboid(0.01, 0.01, 0.25);
-    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape });
+    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape })?;
     /// assert!(!v.is_valid(&over_table));
+    /// // A link the model does not have, or a rod of negative length, is refused.
+    /// let rod = |link, half: f32| Attached { name: "rod".into(), link, offset: Isometry3::identity(), shape: SharedShape::cuboid(0.01, 0.01, half) };
+    /// assert!(v.attach(rod(99, 0.25)).is_err());
+    /// assert!(v.attach(rod(hand, -0.25)).is_err());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn attach(&mut self, object: Attached) {
+    pub fn attach(&mut self, object: Attached) -> Result<(), PlanError> {
         let link = object.link;
+        let links = self.model.links().len();
+        if link >= links {
+            return Err(PlanError::BadInput(format!(
+                "attached object {:?}: link {link} does not exist (the model has {links} links)",
+                object.name
+            )));
+        }
+        let offset = &object.offset;
+        if !(offset.translation.vector.iter().all(|v| v.is_finite())
+            && offset.rotation.coords.iter().all(|v| v.is_finite()))
+        {
+            return Err(PlanError::BadInput(format!(
+                "attached object {:?}: its offset is not finite",
+                object.name
+            )));
+        }
+        // The shape as an obstacle at the offset: the same checks of sizes and points.
+        let probe = crate::obstacles::Obstacle::new(object.name.clone(), object.shape.clone(), to_pose(offset));
+        if let Err(defect) = probe.check() {
+            return Err(PlanError::BadInput(format!(
+                "attached object {:?}: {defect}",
+                object.name
+            )));
+        }
         self.attached.push(object);
         if !self.moving_fk.contains(link) {
             // A frame without geometry may now hold an object: follow it, from a full pass.
@@ -967,6 +1001,7 @@ impl RobotValidity {
             self.rest_fk = rest_subsets(&self.model, &self.geometric, &self.moving_fk, &moves);
             self.fixed_poses_current = false;
         }
+        Ok(())
     }
 
     /// Removes every attached object.
@@ -988,7 +1023,7 @@ impl RobotValidity {
     /// let mut v = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![table])));
     /// let hand = panda.link_index("panda_hand")?;
     /// let shape = SharedShape::cuboid(0.01, 0.01, 0.25); // a 50 cm rod
-    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape });
+    /// v.attach(Attached { name: "rod".into(), link: hand, offset: Isometry3::translation(0.0, 0.0, 0.25), shape })?;
     /// let over_table = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
     /// assert!(!v.is_valid(&over_table));
     /// v.detach_all();

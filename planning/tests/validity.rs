@@ -3,6 +3,7 @@
 use std::sync::Arc;
 
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::PlanError;
 use hearth_planning::motion::MotionValidator;
 use hearth_planning::obstacles::{Obstacle, ParryScene};
 use hearth_planning::space::JointSpace;
@@ -101,7 +102,8 @@ fn attached_object_moves_with_the_hand() {
         link: hand,
         offset: Isometry3::translation(0.0, 0.0, 0.05),
         shape: SharedShape::ball(0.1),
-    });
+    })
+    .unwrap();
     assert!(!v.is_valid(&FOLDED));
     assert!(v.explain(&FOLDED).unwrap().to_string().contains("attached:ball"));
     v.detach_all();
@@ -133,7 +135,8 @@ fn an_object_held_at_a_frame_without_geometry_follows_every_state() {
         link: tcp_link,
         offset: Isometry3::translation(0.0, 0.0, 0.12),
         shape: SharedShape::ball(0.05),
-    });
+    })
+    .unwrap();
     assert!(v.is_valid(&raised), "{:?}", v.explain(&raised));
     assert!(!v.is_valid(&FOLDED));
     assert!(v.is_valid(&raised), "{:?}", v.explain(&raised));
@@ -325,4 +328,54 @@ fn tool_steps_move_the_tool_straight_along_its_axes() {
     assert!(!v.tool_step(&FOLDED, 0, f64::INFINITY, &mut out));
     assert!(!v.tool_step(&FOLDED[..6], 0, 0.01, &mut out[..6]));
     assert_eq!(out, [7.0; 7]);
+}
+
+/// An attached object with a link the model lacks, a non-finite offset or a broken shape is
+/// refused with `BadInput` naming it, and leaves the validator as it was (before, a link
+/// out of range panicked at the first check and a NaN shape answered wrongly).
+#[test]
+fn attaching_a_broken_object_is_refused_and_changes_nothing() {
+    let m = RobotModel::builtin("panda").unwrap();
+    let hand = m.link_index("panda_hand").unwrap();
+    let links = m.links().len();
+    let shelf = Obstacle::cuboid(
+        "shelf",
+        Pose::translation(0.3, 0.0, 0.2),
+        Vector::new(0.05, 0.05, 0.005),
+    );
+    let mut v = panda(vec![shelf]);
+    let before = v.is_valid(&FOLDED);
+    let object = |link: usize, offset: Isometry3<f64>, shape: SharedShape| Attached {
+        name: "mug".into(),
+        link,
+        offset,
+        shape,
+    };
+    let nan_offset = Isometry3::translation(f64::NAN, 0.0, 0.0);
+    let cases = [
+        (
+            object(links, Isometry3::identity(), SharedShape::ball(0.05)),
+            "does not exist",
+        ),
+        (
+            object(hand, nan_offset, SharedShape::ball(0.05)),
+            "offset is not finite",
+        ),
+        (
+            object(hand, Isometry3::identity(), SharedShape::ball(f32::NAN)),
+            "radius is NaN",
+        ),
+        (
+            object(hand, Isometry3::identity(), SharedShape::cuboid(0.1, -0.1, 0.1)),
+            "half-extent is -0.1",
+        ),
+    ];
+    for (bad, says) in cases {
+        match v.attach(bad) {
+            Err(PlanError::BadInput(m)) => assert!(m.contains("\"mug\"") && m.contains(says), "{m}"),
+            other => panic!("{says}: {other:?}"),
+        }
+        assert_eq!(v.is_valid(&FOLDED), before);
+        assert!(v.explain(&FOLDED).is_none_or(|c| !c.to_string().contains("mug")));
+    }
 }

@@ -725,7 +725,7 @@ impl Arm {
                 link: self.tip,
                 offset: h.shape_offset,
                 shape: h.shape.clone(),
-            });
+            })?;
         }
         Ok(v)
     }
