@@ -139,12 +139,13 @@ fn planners(c: &mut Criterion) {
             .map(|w| PlanRequest::new(w[0].clone(), Goal::Config(w[1].clone())))
             .collect::<Vec<_>>()
     };
-    for (name, keep) in [("BiRRT", false), ("LazyPRM, fresh", false), ("LazyPRM, kept", true)] {
-        let solved = if name == "BiRRT" {
-            plan_queries(&mut f, &queries, BiRrt::default, keep)
-        } else {
-            plan_queries(&mut f, &queries, || LazyPrm::new(LazyPrmSettings::default()), keep)
-        };
+    let prm = || LazyPrm::new(LazyPrmSettings::default());
+    let solved = [
+        ("BiRRT", plan_queries(&mut f, &queries, BiRrt::default, false)),
+        ("LazyPRM, fresh", plan_queries(&mut f, &queries, prm, false)),
+        ("LazyPRM, kept", plan_queries(&mut f, &queries, prm, true)),
+    ];
+    for (name, solved) in solved {
         eprintln!(
             "queries/panda_table_pick_16: {name} solves {solved} of {}",
             queries.len()
@@ -155,7 +156,6 @@ fn planners(c: &mut Criterion) {
     g.bench_function("birrt", |b| {
         b.iter(|| black_box(plan_queries(&mut f, &queries, BiRrt::default, false)))
     });
-    let prm = || LazyPrm::new(LazyPrmSettings::default());
     g.bench_function("lazyprm_fresh", |b| {
         b.iter(|| black_box(plan_queries(&mut f, &queries, prm, false)))
     });

@@ -976,20 +976,15 @@ impl RobotValidity {
                 object.name
             )));
         }
-        let offset = &object.offset;
-        if !(offset.translation.vector.iter().all(|v| v.is_finite())
-            && offset.rotation.coords.iter().all(|v| v.is_finite()))
-        {
-            return Err(PlanError::BadInput(format!(
-                "attached object {:?}: its offset is not finite",
-                object.name
-            )));
-        }
-        // The shape as an obstacle at the offset: the same checks of sizes and points.
-        let probe = crate::obstacles::Obstacle::new(object.name.clone(), object.shape.clone(), to_pose(offset));
+        // The shape as an obstacle at its offset: the same checks of pose, sizes and points.
+        let probe = crate::obstacles::Obstacle::new(String::new(), object.shape.clone(), to_pose(&object.offset));
         if let Err(defect) = probe.check() {
+            let what = match defect {
+                crate::obstacles::ObstacleDefect::Pose => "its offset is not finite".to_owned(),
+                defect => defect.to_string(),
+            };
             return Err(PlanError::BadInput(format!(
-                "attached object {:?}: {defect}",
+                "attached object {:?}: {what}",
                 object.name
             )));
         }

@@ -356,6 +356,14 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
 /// The seed of one plan's random stream: the bench's seed, the problem id and the repeat,
 /// mixed ([`mix`], SplitMix64's finaliser, after each) so that no two of them share a stream.
 /// (XOR-ing them gave seed 1's repeats 0 and 1 the streams of seed 0's repeats 1 and 0.)
+/// A plan's statistics in its JSON row, for solved plans and plans stopped by the budget.
+fn put_stats(row: &mut Value, stats: &hearth_planning::PlanStats) {
+    row["plan_time_s"] = json!(stats.time.as_secs_f64());
+    row["plan_checks"] = json!(stats.states_checked);
+    row["iterations"] = json!(stats.iterations);
+    row["tree_sizes"] = json!(stats.tree_sizes);
+}
+
 fn plan_seed(seed: u64, id: u32, repeat: u32) -> u64 {
     mix(mix(mix(seed) ^ u64::from(id)) ^ u64::from(repeat))
 }
@@ -570,17 +578,11 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         // A plan cut off by its budget reports what it did, in the fields a
                         // solved plan has (the summary's medians read solved plans only).
                         if let hearth_planning::PlanError::Timeout { stats } = &e {
-                            row["plan_time_s"] = json!(stats.time.as_secs_f64());
-                            row["plan_checks"] = json!(stats.states_checked);
-                            row["iterations"] = json!(stats.iterations);
-                            row["tree_sizes"] = json!(stats.tree_sizes);
+                            put_stats(&mut row, stats);
                         }
                     }
                     Ok(sol) => {
-                        row["plan_time_s"] = json!(sol.stats.time.as_secs_f64());
-                        row["plan_checks"] = json!(sol.stats.states_checked);
-                        row["iterations"] = json!(sol.stats.iterations);
-                        row["tree_sizes"] = json!(sol.stats.tree_sizes);
+                        put_stats(&mut row, &sol.stats);
                         let fine_resolution = a.fine_resolution.min(a.resolution / 10.0);
                         let settings = ShortcutSettings {
                             attempts: a.shortcut_attempts,
