@@ -874,3 +874,64 @@ fn benches_refuse_an_unwritable_json_file_before_measuring() {
         );
     }
 }
+
+/// `bench compare` matches two `bench plan` runs plan by plan: a run against a rerun with the
+/// same seed is the same in every plan; files that are not results are refused by name.
+#[test]
+fn bench_compare_matches_two_runs_plan_by_plan() {
+    let dir = temp_dir("compare");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/panda_table_pick.json");
+    let run = |seed: &str, name: &str| {
+        let path = dir.join(name);
+        let args = [
+            "bench",
+            "plan",
+            "--problems",
+            data,
+            "--planner",
+            "birrt",
+            "--shortcut",
+            "none",
+            "--warm-up",
+            "0",
+            "--seed",
+            seed,
+            "--json",
+            path.to_str().unwrap(),
+        ];
+        let o = hearth(&args);
+        assert!(o.status.success(), "bench plan failed: {}", stderr(&o));
+        path.to_str().unwrap().to_owned()
+    };
+    let (a, b, c) = (run("3", "a.json"), run("3", "b.json"), run("4", "c.json"));
+    let out = dir.join("compare.json");
+    let o = hearth(&["bench", "compare", &a, &b, "--json", out.to_str().unwrap()]);
+    assert!(o.status.success(), "bench compare failed: {}", stderr(&o));
+    assert!(stdout(&o).contains("table_pick"), "{}", stdout(&o));
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let all = &v["groups"]["all"];
+    // Problem 41 is skipped in both runs; problem 1 is planned in both, the same plan.
+    assert_eq!(
+        (all["plans"].as_u64(), all["same_plans"].as_u64()),
+        (Some(1), Some(1)),
+        "{v}"
+    );
+    assert_eq!(all["solved_both"].as_u64(), Some(1), "{v}");
+    assert!(all["median_ratio"].as_f64().is_some_and(|r| r > 0.0), "{v}");
+    // Another seed plans the same problem another way.
+    let o = hearth(&["bench", "compare", &a, &c]);
+    assert!(o.status.success(), "bench compare failed: {}", stderr(&o));
+    let row = stdout(&o)
+        .lines()
+        .find(|l| l.starts_with("all"))
+        .unwrap_or_default()
+        .to_owned();
+    assert!(row.split_whitespace().last() == Some("0"), "not the same plan: {row}");
+    // A problem file is not a results file; a missing file is named.
+    let err = fails(&["bench", "compare", data, &a]);
+    assert!(err.contains("has no `results` list"), "{err}");
+    let missing = dir.join("missing.json");
+    let err = fails(&["bench", "compare", &a, missing.to_str().unwrap()]);
+    assert!(err.contains("cannot read") && err.contains("missing.json"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -25,6 +25,9 @@ pub enum BenchCommand {
     Render(super::bench_render::BenchRenderArgs),
     /// Env steps per second (one env, and N envs together) and memory per env.
     Env(super::bench_env::BenchEnvArgs),
+    /// Two `bench plan --json` files side by side, plan by plan: solved counts, times over the
+    /// plans both solved, and how many plans are the same plan in both.
+    Compare(super::bench_compare::BenchCompareArgs),
 }
 
 #[derive(Args, Debug)]
@@ -54,6 +57,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Lidar(a) => super::bench_lidar::run(a),
         BenchCommand::Render(a) => super::bench_render::run(a),
         BenchCommand::Env(a) => super::bench_env::run(a),
+        BenchCommand::Compare(a) => super::bench_compare::run(a),
     }
 }
 

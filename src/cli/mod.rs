@@ -1,6 +1,7 @@
 //! Command-line interface definitions and dispatch.
 
 mod bench;
+mod bench_compare;
 mod bench_env;
 mod bench_lidar;
 mod bench_plan;
