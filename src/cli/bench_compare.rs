@@ -64,7 +64,12 @@ fn plans(v: &Value, path: &Path) -> anyhow::Result<BTreeMap<Key, Plan>> {
             .get("id")
             .and_then(Value::as_u64)
             .with_context(|| format!("{}: result {i} has no numeric `id`", path.display()))?;
-        let repeat = row.get("repeat").and_then(Value::as_u64).unwrap_or(0);
+        let repeat = match row.get("repeat") {
+            None => 0,
+            Some(r) => r
+                .as_u64()
+                .with_context(|| format!("{}: result {i} has `repeat` {r}, not a count", path.display()))?,
+        };
         let attempted = row.get("skipped").is_none();
         let success = row.get("success") == Some(&Value::Bool(true));
         let time_ms = match row.get("plan_time_s") {
@@ -97,7 +102,7 @@ fn plans(v: &Value, path: &Path) -> anyhow::Result<BTreeMap<Key, Plan>> {
             time_ms,
             signature,
         };
-        if let Some(_twice) = out.insert(key.clone(), plan) {
+        if out.insert(key.clone(), plan).is_some() {
             bail!(
                 "{}: plan {}/{} {} (repeat {}) appears twice",
                 path.display(),
@@ -357,6 +362,9 @@ mod tests {
         let mut no_time = row("box", 1, true, 0.002, 90);
         no_time.as_object_mut().unwrap().remove("plan_time_s");
         assert!(err(good.clone(), file(vec![no_time])).contains("solved but has no `plan_time_s`"));
+        let mut bad_repeat = row("box", 1, true, 0.002, 90);
+        bad_repeat["repeat"] = json!("first");
+        assert!(err(file(vec![bad_repeat]), good.clone()).contains("has `repeat` \"first\", not a count"));
         let negative = file(vec![row("box", 1, true, -1.0, 90)]);
         assert!(err(good.clone(), negative).contains("not a time"));
         let other = file(vec![row("cage", 1, true, 0.002, 90)]);
