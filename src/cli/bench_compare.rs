@@ -165,8 +165,11 @@ impl Group {
     fn to_json(&self) -> Value {
         let (mb, mn, ratio, gmean) = self.times();
         let num = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+        // Of the plans both solved, those the new run planned in less time: with the
+        // ratios, a first sign of whether a change helps most plans or a few.
+        let faster = self.both.iter().filter(|(b, n)| n < b).count();
         json!({"plans": self.plans, "solved_base": self.solved_base, "solved_new": self.solved_new,
-               "solved_both": self.both.len(), "same_plans": self.same,
+               "solved_both": self.both.len(), "new_faster": faster, "same_plans": self.same,
                "plan_time_ms_median_base": num(mb), "plan_time_ms_median_new": num(mn),
                "median_ratio": num(ratio), "geometric_mean_ratio": num(gmean)})
     }
@@ -228,8 +231,18 @@ pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
     create_json(a.json.as_deref())?;
     println!("base: {}\nnew:  {}", a.base.display(), a.new.display());
     println!(
-        "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>6}",
-        "family", "plans", "solved base", "solved new", "both", "base ms", "new ms", "new/base", "geo mean", "same"
+        "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>7} {:>6}",
+        "family",
+        "plans",
+        "solved base",
+        "solved new",
+        "both",
+        "base ms",
+        "new ms",
+        "new/base",
+        "geo mean",
+        "faster",
+        "same"
     );
     let cell = |v: &Value, digits: usize| v.as_f64().map_or("-".to_owned(), |x| format!("{x:.digits$}"));
     let count = |v: &Value| v.as_u64().map_or("-".to_owned(), |n| n.to_string());
@@ -238,7 +251,7 @@ pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
     let (all, families): (Vec<_>, Vec<_>) = groups.partition(|(name, _)| name.as_str() == "all");
     for (name, g) in families.into_iter().chain(all) {
         println!(
-            "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>6}",
+            "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>7} {:>6}",
             name,
             count(&g["plans"]),
             count(&g["solved_base"]),
@@ -248,6 +261,7 @@ pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
             cell(&g["plan_time_ms_median_new"], 3),
             cell(&g["median_ratio"], 3),
             cell(&g["geometric_mean_ratio"], 3),
+            count(&g["new_faster"]),
             count(&g["same_plans"])
         );
     }
@@ -262,7 +276,10 @@ pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
             u["only_in_base"], u["only_in_new"], u["skipped_in_one"]
         );
     }
-    println!("times are medians over the plans both runs solved; new/base below 1 means the new run planned faster");
+    println!(
+        "times are medians over the plans both runs solved; new/base below 1 means the new run planned faster; \
+         faster: the plans both solved that the new run planned in less time"
+    );
     if let Some(path) = &a.json {
         std::fs::write(path, serde_json::to_string(&out)?).with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
@@ -310,6 +327,7 @@ mod tests {
             (Some(2), Some(3))
         );
         assert_eq!(g["same_plans"].as_u64(), Some(1), "only plan 2 is the same plan");
+        assert_eq!(g["new_faster"].as_u64(), Some(1), "plan 1 is faster, plan 2 as fast");
         // Plans 1 and 2: ratios 0.5 and 1, geometric mean √0.5; plan 3 (new only) is left out.
         let gmean = g["geometric_mean_ratio"].as_f64().unwrap();
         assert!((gmean - 0.5f64.sqrt()).abs() < 1e-12, "{gmean}");
@@ -438,6 +456,7 @@ mod tests {
                     prop_assert!(n("plans") > 0);
                     prop_assert!(n("solved_both") <= n("solved_base").min(n("solved_new")));
                     prop_assert!(n("solved_base") <= n("plans") && n("same_plans") <= n("plans"));
+                    prop_assert!(n("new_faster") <= n("solved_both"));
                     let sum: u64 = out["groups"].as_object().unwrap().iter()
                         .filter(|(k, _)| k.as_str() != "all")
                         .map(|(_, g)| g["plans"].as_u64().unwrap())
