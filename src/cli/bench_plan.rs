@@ -353,9 +353,6 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
     })
 }
 
-/// The seed of one plan's random stream: the bench's seed, the problem id and the repeat,
-/// mixed ([`mix`], SplitMix64's finaliser, after each) so that no two of them share a stream.
-/// (XOR-ing them gave seed 1's repeats 0 and 1 the streams of seed 0's repeats 1 and 0.)
 /// A plan's statistics in its JSON row, for solved plans and plans stopped by the budget.
 fn put_stats(row: &mut Value, stats: &hearth_planning::PlanStats) {
     row["plan_time_s"] = json!(stats.time.as_secs_f64());
@@ -364,6 +361,9 @@ fn put_stats(row: &mut Value, stats: &hearth_planning::PlanStats) {
     row["tree_sizes"] = json!(stats.tree_sizes);
 }
 
+/// The seed of one plan's random stream: the bench's seed, the problem id and the repeat,
+/// mixed ([`mix`], SplitMix64's finaliser, after each) so that no two of them share a stream.
+/// (XOR-ing them gave seed 1's repeats 0 and 1 the streams of seed 0's repeats 1 and 0.)
 fn plan_seed(seed: u64, id: u32, repeat: u32) -> u64 {
     mix(mix(mix(seed) ^ u64::from(id)) ^ u64::from(repeat))
 }
