@@ -476,7 +476,8 @@ fn bench_plan_writes_results_json() {
             .collect()
     };
     assert_eq!(field(&v, "robot"), ["panda", "panda", "fetch"]);
-    // LazyPRM takes the benchmark's step for the Fetch, its own for the Panda.
+    // LazyPRM takes the benchmark's step and greedy growth for the Fetch, its own defaults for
+    // the Panda.
     let o = bench_plan(&[
         "--problems",
         fetch,
@@ -491,8 +492,9 @@ fn bench_plan_writes_results_json() {
     assert!(
         o.status.success()
             && err.contains("fetch: ")
-            && err.contains("LazyPRM step 4 rad")
-            && err.contains("LazyPRM step the planner's default"),
+            && err.contains("LazyPRM step 4 rad, wedged ends grown greedily")
+            && err.contains("LazyPRM step the planner's default")
+            && !err.contains("default, wedged ends grown greedily"),
         "{err}"
     );
     // Two racing copies per plan: said on the setup line; the same seed plans the same paths.
