@@ -801,7 +801,9 @@ impl<S: Space> Planner<S> for LazyPrm {
         let goal_ids: Vec<u32> = goals.iter().map(|g| roadmap.add(space, g, k, range)).collect();
         let mut sample = vec![0.0; dim];
         let mut near = vec![0.0; dim];
-        // Per query end: its growth turns, the vertices they added, and its escape helper.
+        // Per query end: its growth turns, how many of them grew it (a greedy turn that adds
+        // several vertices counts once, as the escape's stuck test counts turns), and its
+        // escape helper.
         let mut turns = [0u64; 2];
         let mut added = [0u64; 2];
         let mut helpers: [Option<Helper>; 2] = [None, None];

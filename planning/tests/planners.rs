@@ -1375,12 +1375,10 @@ fn lazy_prm_node_enhancement_reaches_a_goal_in_a_slot() {
     assert!(4 * enhanced < 3 * uniform, "enhanced {enhanced}, uniform {uniform}");
 }
 
-#[test]
-fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
-    // The goal of `pocket` at the closed end of its corridor, in a 2 × 2 square around the
-    // block, with four free dimensions more (6-D, as the roadmap's arms are high-dimensional):
-    // lazy edges into the corridor fail unless they end in it, and out of it unless they
-    // leave through the hole. Growing the goal's part like a tree gets it out.
+/// [`pocket`]'s goal at the closed end of its corridor, in a 2 × 2 square around the block,
+/// with four free dimensions more (6-D, as the roadmap's arms are high-dimensional): the space
+/// and the request.
+fn pocket_6d() -> (JointSpace, PlanRequest) {
     let (mut lo, mut hi) = (vec![99.75, 99.5], vec![101.75, 101.5]);
     lo.extend([0.0; 4]);
     hi.extend([1.0; 4]);
@@ -1389,30 +1387,51 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
         vec![99.85, 99.6, 0.5, 0.5, 0.5, 0.5],
         Goal::Config(vec![100.88, 100.5, 0.5, 0.5, 0.5, 0.5]),
     );
+    (space, request)
+}
+
+/// LazyPRM with steps of 0.4 and otherwise `settings` in [`pocket_6d`], seeds 0–14, each path
+/// checked: the medians of the iterations to a solution (the budget when none) and of the
+/// roadmap's size.
+fn pocket_6d_lazy_prm_medians(settings: &LazyPrmSettings) -> (u64, usize) {
+    let (space, request) = pocket_6d();
     let mut v = pocket();
-    // Iterations to a solution (the budget when none), median over 15 seeds.
-    let mut median_iterations = |tree_share: f64| {
-        let mut its: Vec<u64> = (0..15)
-            .map(|seed| {
-                let mut motion = MotionValidator::new(space.clone(), POCKET_RESOLUTION);
-                let mut rng = Pcg64Mcg::seed_from_u64(seed);
-                let mut prm = LazyPrm::new(LazyPrmSettings {
-                    range: Some(0.4),
-                    tree_share,
-                    ..Default::default()
-                });
-                match prm.plan(&mut motion, &mut v, &request, &budget(40_000), &mut rng) {
-                    Ok(s) => {
-                        check_solution(&space, POCKET_RESOLUTION, &mut v, &request, &s);
-                        s.stats.iterations
-                    }
-                    Err(PlanError::Timeout { stats }) => stats.iterations,
-                    Err(e) => panic!("seed {seed}: {e}"),
+    let (mut its, mut sizes): (Vec<u64>, Vec<usize>) = (0..15)
+        .map(|seed| {
+            let mut motion = MotionValidator::new(space.clone(), POCKET_RESOLUTION);
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            let mut prm = LazyPrm::new(LazyPrmSettings {
+                range: Some(0.4),
+                ..settings.clone()
+            });
+            let its = match prm.plan(&mut motion, &mut v, &request, &budget(40_000), &mut rng) {
+                Ok(s) => {
+                    check_solution(&space, POCKET_RESOLUTION, &mut v, &request, &s);
+                    s.stats.iterations
                 }
-            })
-            .collect();
-        its.sort_unstable();
-        its[its.len() / 2]
+                Err(PlanError::Timeout { stats }) => stats.iterations,
+                Err(e) => panic!("seed {seed}: {e}"),
+            };
+            (its, prm.roadmap_size())
+        })
+        .unzip();
+    its.sort_unstable();
+    sizes.sort_unstable();
+    (its[its.len() / 2], sizes[sizes.len() / 2])
+}
+
+#[test]
+fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
+    // In `pocket_6d`, lazy edges into the corridor fail unless they end in it, and out of it
+    // unless they leave through the hole. Growing the goal's part like a tree gets it out.
+    let (space, request) = pocket_6d();
+    let mut v = pocket();
+    let median_iterations = |tree_share: f64| {
+        pocket_6d_lazy_prm_medians(&LazyPrmSettings {
+            tree_share,
+            ..Default::default()
+        })
+        .0
     };
     let (without, with) = (
         median_iterations(0.0),
@@ -1463,7 +1482,7 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
     assert_ne!(default.map(|(i, c, _)| (i, c)), early.map(|(i, c, _)| (i, c)));
 }
 
-/// The 6-D pocket of [`lazy_prm_grows_a_wedged_goal_out_of_a_pocket`], LazyPRM's wedged-end
+/// In [`pocket_6d`], LazyPRM's wedged-end
 /// growth with and without the greedy extension ([`LazyPrmSettings::tree_connect`]): a free
 /// step goes on towards its sample, so a growth turn adds several vertices (the roadmap is
 /// about three times larger when solved) and the plans take no more iterations (449 against
@@ -1471,40 +1490,11 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
 /// turn.
 #[test]
 fn lazy_prm_wedged_growth_extends_greedily() {
-    let (mut lo, mut hi) = (vec![99.75, 99.5], vec![101.75, 101.5]);
-    lo.extend([0.0; 4]);
-    hi.extend([1.0; 4]);
-    let space = JointSpace::new(&lo, &hi, &[false; 6]).unwrap();
-    let request = PlanRequest::new(
-        vec![99.85, 99.6, 0.5, 0.5, 0.5, 0.5],
-        Goal::Config(vec![100.88, 100.5, 0.5, 0.5, 0.5, 0.5]),
-    );
-    let mut v = pocket();
-    // Iterations to a solution (the budget when none) and roadmap size, medians over 15 seeds.
-    let mut medians = |tree_connect: bool| {
-        let (mut its, mut sizes): (Vec<u64>, Vec<usize>) = (0..15)
-            .map(|seed| {
-                let mut motion = MotionValidator::new(space.clone(), POCKET_RESOLUTION);
-                let mut rng = Pcg64Mcg::seed_from_u64(seed);
-                let mut prm = LazyPrm::new(LazyPrmSettings {
-                    range: Some(0.4),
-                    tree_connect,
-                    ..Default::default()
-                });
-                let its = match prm.plan(&mut motion, &mut v, &request, &budget(40_000), &mut rng) {
-                    Ok(s) => {
-                        check_solution(&space, POCKET_RESOLUTION, &mut v, &request, &s);
-                        s.stats.iterations
-                    }
-                    Err(PlanError::Timeout { stats }) => stats.iterations,
-                    Err(e) => panic!("seed {seed}: {e}"),
-                };
-                (its, prm.roadmap_size())
-            })
-            .unzip();
-        its.sort_unstable();
-        sizes.sort_unstable();
-        (its[its.len() / 2], sizes[sizes.len() / 2])
+    let medians = |tree_connect: bool| {
+        pocket_6d_lazy_prm_medians(&LazyPrmSettings {
+            tree_connect,
+            ..Default::default()
+        })
     };
     let (one_step, greedy) = (medians(false), medians(true));
     println!("pocket: median LazyPRM (iterations, roadmap size): one step a turn {one_step:?}, greedy {greedy:?}");
