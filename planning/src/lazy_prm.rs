@@ -922,30 +922,26 @@ impl<S: Space> Planner<S> for LazyPrm {
                         }
                         None => {
                             let from = roadmap.nearest_wedged(space, turn, &sample);
-                            let q_from = roadmap.nn.state(from as usize);
-                            let ok = try_step(motion, validator, q_from, &sample, tree_step, &mut near);
-                            if ok {
-                                let mut v = roadmap.add_reached(motion.space(), turn, from, &near, k, range);
-                                // Onward to the sample while free (the step that lands on it is
-                                // the last one; the cap only guards against steps that make no
-                                // headway in floating point).
-                                let onward = if self.settings.tree_connect {
-                                    MAX_CONNECT_STEPS
-                                } else {
-                                    0
-                                };
-                                for _ in 0..onward {
-                                    let q_v = roadmap.nn.state(v as usize);
-                                    let space = motion.space();
-                                    if space.distance(q_v, &sample) == 0.0
-                                        || !try_step(motion, validator, q_v, &sample, tree_step, &mut near)
-                                    {
-                                        break;
-                                    }
-                                    v = roadmap.add_reached(motion.space(), turn, v, &near, k, range);
+                            // One step towards the sample, or with `tree_connect` steps on
+                            // until one is blocked or lands on the sample (the cap only guards
+                            // against steps that make no headway in floating point).
+                            let most = if self.settings.tree_connect {
+                                1 + MAX_CONNECT_STEPS
+                            } else {
+                                1
+                            };
+                            let (mut at, mut taken) = (from, 0);
+                            while taken < most {
+                                let q_at = roadmap.nn.state(at as usize);
+                                if (taken > 0 && motion.space().distance(q_at, &sample) == 0.0)
+                                    || !try_step(motion, validator, q_at, &sample, tree_step, &mut near)
+                                {
+                                    break;
                                 }
+                                at = roadmap.add_reached(motion.space(), turn, at, &near, k, range);
+                                taken += 1;
                             }
-                            ok
+                            taken > 0
                         }
                     };
                     if grown {
