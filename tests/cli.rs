@@ -497,6 +497,38 @@ fn bench_plan_writes_results_json() {
             && !err.contains("default, wedged ends grown greedily"),
         "{err}"
     );
+    // `--tree-connect` overrides the benchmark's choice for every robot.
+    for (value, fetch_step, panda_step) in [
+        ("false", "LazyPRM step 4 rad", "LazyPRM step the planner's default"),
+        (
+            "true",
+            "LazyPRM step 4 rad, wedged ends grown greedily",
+            "LazyPRM step the planner's default, wedged ends grown greedily",
+        ),
+    ] {
+        let o = bench_plan(&[
+            "--problems",
+            fetch,
+            "--planner",
+            "lazyprm",
+            "--tree-connect",
+            value,
+            "--warm-up",
+            "0",
+            "--shortcut",
+            "none",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        // A robot's setup line ends with its planner step.
+        let setup_ends = |robot: &str, step: &str| {
+            err.lines()
+                .any(|l| l.starts_with(&format!("{robot}: ")) && l.ends_with(step))
+        };
+        assert!(
+            o.status.success() && setup_ends("fetch", fetch_step) && setup_ends("panda", panda_step),
+            "--tree-connect {value}: {err}"
+        );
+    }
     // Two racing copies per plan: said on the setup line; the same seed plans the same paths.
     let raced = |name: &str| {
         let (err, v) = bench_json(
@@ -625,6 +657,14 @@ fn bench_plan_writes_results_json() {
             "--connect applies to --planner birrt only",
         ),
         (&["--connect", "sideways"][..], "invalid value 'sideways'"),
+        (
+            &["--tree-connect", "true"][..],
+            "--tree-connect applies to --planner lazyprm only",
+        ),
+        (
+            &["--planner", "lazyprm", "--tree-connect", "yes"][..],
+            "invalid value 'yes'",
+        ),
         (&["--repeat", "0"][..], "0 is not in 1.."),
     ] {
         let o = bench_plan(extra);

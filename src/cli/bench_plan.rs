@@ -137,6 +137,13 @@ pub struct BenchPlanArgs {
     /// planned the Panda's open ones faster. See `docs/planning-log.md`.
     #[arg(long, value_enum)]
     connect: Option<ConnectArg>,
+    /// LazyPRM only: whether a wedged start or goal grows greedily, each free growth step going
+    /// on towards its sample until blocked (`LazyPrmSettings::tree_connect`): `true` or
+    /// `false`. When absent: on for the Fetch, where it solved more of the bookshelf and cage
+    /// plans and planned cage's faster, off for the Panda, whose plans it slowed 1.5×, and for
+    /// other robots (the planner's default). See `docs/planning-log.md`.
+    #[arg(long, value_name = "BOOL")]
+    tree_connect: Option<bool>,
     /// RRT only: probability of steering towards a point near a goal (`Rrt::goal_zone`); 0 is
     /// OMPL's RRT. When absent: 0.8 for the Panda and the Fetch, the planner's default (0.1)
     /// otherwise.
@@ -278,12 +285,13 @@ fn lazyprm_range(robot: &str, range: Option<f64>) -> Option<f64> {
 }
 
 /// Whether LazyPRM's wedged query ends grow greedily ([`LazyPrmSettings::tree_connect`]) for a
-/// robot, as measured on MotionBenchMaker (`docs/planning-log.md`, forty-fifth round): on the
-/// Fetch, seeds 0–5, 1,815 of the 1,866 bookshelf and cage plans solved against 1,810 and cage
-/// plans 0.84× as long (geometric mean); the Panda's plans, short and seldom wedged, take 1.5×
-/// as long with it, so it and other robots keep the default (off).
-fn lazyprm_connect(robot: &str) -> bool {
-    robot == "fetch"
+/// robot: `tree_connect` where given, else as measured on MotionBenchMaker
+/// (`docs/planning-log.md`, forty-fifth round): on the Fetch, seeds 0–5, 1,815 of the 1,866
+/// bookshelf and cage plans solved against 1,810 and cage plans 0.84× as long (geometric
+/// mean); the Panda's plans, short and seldom wedged, take 1.5× as long with it, so it and
+/// other robots keep the default (off).
+fn lazyprm_connect(robot: &str, tree_connect: Option<bool>) -> bool {
+    tree_connect.unwrap_or(robot == "fetch")
 }
 
 /// A planner step for the setup line: `4 rad`, or the planner's default when unset.
@@ -428,6 +436,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.connect.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--connect applies to --planner birrt only");
     }
+    if a.tree_connect.is_some() && a.planner != PlannerKind::Lazyprm {
+        bail!("--tree-connect applies to --planner lazyprm only");
+    }
     let mut sets: Vec<(ProblemSet, Option<PathBuf>)> = Vec::new();
     for p in &a.problems {
         if p.is_dir() {
@@ -493,7 +504,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 }
                 PlannerKind::Lazyprm => {
                     let range = step_text(lazyprm_range(&set.robot, a.range));
-                    let greedy = if lazyprm_connect(&set.robot) {
+                    let greedy = if lazyprm_connect(&set.robot, a.tree_connect) {
                         ", wedged ends grown greedily"
                     } else {
                         ""
@@ -571,7 +582,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     PlannerKind::Lazyprm => Race::new(
                         LazyPrm::new(LazyPrmSettings {
                             range: lazyprm_range(&set.robot, a.range),
-                            tree_connect: lazyprm_connect(&set.robot),
+                            tree_connect: lazyprm_connect(&set.robot, a.tree_connect),
                             escape: escape_for(&a),
                             ..LazyPrmSettings::default()
                         }),
