@@ -477,58 +477,64 @@ fn bench_plan_writes_results_json() {
     };
     assert_eq!(field(&v, "robot"), ["panda", "panda", "fetch"]);
     // LazyPRM takes the benchmark's step and greedy growth for the Fetch, its own defaults for
-    // the Panda.
-    let o = bench_plan(&[
-        "--problems",
-        fetch,
-        "--planner",
-        "lazyprm",
-        "--warm-up",
-        "0",
-        "--shortcut",
-        "none",
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        o.status.success()
-            && err.contains("fetch: ")
-            && err.contains("LazyPRM step 4 rad, wedged ends grown greedily")
-            && err.contains("LazyPRM step the planner's default")
-            && !err.contains("default, wedged ends grown greedily"),
-        "{err}"
-    );
-    // `--tree-connect` overrides the benchmark's choice for every robot.
-    for (value, fetch_step, panda_step) in [
-        ("false", "LazyPRM step 4 rad", "LazyPRM step the planner's default"),
-        (
-            "true",
-            "LazyPRM step 4 rad, wedged ends grown greedily",
-            "LazyPRM step the planner's default, wedged ends grown greedily",
-        ),
-    ] {
-        let o = bench_plan(&[
+    // the Panda; `--tree-connect` sets the greedy growth for both. A robot's setup line ends
+    // with its planner step. The Panda's first table_pick problem wedges a query end, so its
+    // plan shows whether the growth was greedy.
+    let lazy = |tree_connect: Option<&str>, name: &str| {
+        let mut args = vec![
             "--problems",
             fetch,
             "--planner",
             "lazyprm",
-            "--tree-connect",
-            value,
             "--warm-up",
             "0",
             "--shortcut",
             "none",
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        // A robot's setup line ends with its planner step.
-        let setup_ends = |robot: &str, step: &str| {
-            err.lines()
-                .any(|l| l.starts_with(&format!("{robot}: ")) && l.ends_with(step))
-        };
-        assert!(
-            o.status.success() && setup_ends("fetch", fetch_step) && setup_ends("panda", panda_step),
-            "--tree-connect {value}: {err}"
-        );
-    }
+        ];
+        if let Some(value) = tree_connect {
+            args.extend(["--tree-connect", value]);
+        }
+        let (err, v) = bench_json(&args, name);
+        let p1 = v["results"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["robot"] == "panda" && r["id"] == 1)
+            .unwrap()
+            .clone();
+        assert_eq!(p1["success"], true, "{p1}");
+        (err, p1["checks"].as_u64().unwrap())
+    };
+    let setup_ends = |err: &str, robot: &str, step: &str| {
+        err.lines()
+            .any(|l| l.starts_with(&format!("{robot}: ")) && l.ends_with(step))
+    };
+    let (err, chosen) = lazy(None, "lazy.json");
+    assert!(
+        setup_ends(&err, "fetch", "LazyPRM step 4 rad, wedged ends grown greedily")
+            && setup_ends(&err, "panda", "LazyPRM step the planner's default"),
+        "{err}"
+    );
+    let (err, off) = lazy(Some("false"), "lazy_off.json");
+    assert!(
+        setup_ends(&err, "fetch", "LazyPRM step 4 rad")
+            && setup_ends(&err, "panda", "LazyPRM step the planner's default"),
+        "--tree-connect false: {err}"
+    );
+    let (err, on) = lazy(Some("true"), "lazy_on.json");
+    assert!(
+        setup_ends(&err, "fetch", "LazyPRM step 4 rad, wedged ends grown greedily")
+            && setup_ends(
+                &err,
+                "panda",
+                "LazyPRM step the planner's default, wedged ends grown greedily"
+            ),
+        "--tree-connect true: {err}"
+    );
+    assert!(
+        chosen == off && on != off,
+        "Panda checks: chosen {chosen}, off {off}, on {on}"
+    );
     // Two racing copies per plan: said on the setup line; the same seed plans the same paths.
     let raced = |name: &str| {
         let (err, v) = bench_json(
