@@ -48,8 +48,30 @@ pub const STEP: f64 = 0.01;
 pub const MAX_POINTS: usize = 1 << 21;
 /// How far (m) the grid reaches past the link's bounding box; beyond it, the distance to the
 /// box is the bound.
+///
+/// ```
+/// use hearth_kinematics::{LinkShape, distance_field::{DistanceField, MARGIN}};
+/// use nalgebra::Point3;
+/// use parry3d::shape::SharedShape;
+/// // A 10 cm cube: on the grid just inside the margin, beyond it by the box alone.
+/// let cube = LinkShape { shape: SharedShape::cuboid(0.05, 0.05, 0.05), origin: nalgebra::Isometry3::identity() };
+/// let field = DistanceField::build(&cube);
+/// for x in [0.05 + MARGIN - 0.01, 0.05 + MARGIN + 0.5] {
+///     let bound = field.lower_bound(&Point3::new(x, 0.0, 0.0));
+///     assert!(bound <= x - 0.05 && bound > x - 0.05 - 0.01, "{x}: {bound}");
+/// }
+/// ```
 pub const MARGIN: f64 = 0.06;
 /// Fewest collision elements a link needs to get a field.
+///
+/// ```
+/// use hearth_kinematics::{RobotModel, distance_field::MIN_PARTS};
+/// let fetch = RobotModel::builtin("fetch").unwrap();
+/// for link in 0..fetch.links().len() {
+///     let parts = fetch.link_shape(link).map_or(0, |s| s.shape.as_compound().map_or(1, |c| c.shapes().len()));
+///     assert_eq!(fetch.link_field(link).is_some(), parts >= MIN_PARTS, "{}", fetch.links()[link].name);
+/// }
+/// ```
 pub const MIN_PARTS: usize = 4;
 /// Unit of the stored distances (m); they are rounded down to it.
 const UNIT: f64 = 1e-4;

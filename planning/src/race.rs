@@ -86,6 +86,37 @@ impl<P> Race<P> {
     /// copy finds one, thread 0's error (every copy checks the request the same way, so bad
     /// input and invalid starts and goals are reported as the planner alone reports them).
     ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::planner::{Budget, Goal, PlanRequest};
+    /// use hearth_planning::race::Race;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::StateValidator;
+    /// use hearth_planning::{BiRrt, PlanError};
+    /// use rand::SeedableRng;
+    ///
+    /// // A wall at x = 0.5, closed.
+    /// #[derive(Clone)]
+    /// struct Wall;
+    /// impl StateValidator for Wall {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { (q[0] - 0.5).abs() > 0.05 }
+    ///     fn checks(&self) -> u64 { 0 }
+    /// }
+    /// let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false])?;
+    /// let mut motion = MotionValidator::new(space, 0.01);
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    /// let mut race = Race::new(BiRrt::default(), 2);
+    /// // A start inside the wall: reported as BiRRT alone reports it.
+    /// let inside = PlanRequest::new(vec![0.5, 0.1], Goal::Config(vec![0.9, 0.1]));
+    /// let err = race.plan(&mut motion, &mut Wall, &inside, &Budget::iterations(100), &mut rng);
+    /// assert!(matches!(err, Err(PlanError::InvalidStart { .. })));
+    /// // No way through: every copy stops at the budget, and thread 0's timeout is returned.
+    /// let across = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.1]));
+    /// let err = race.plan(&mut motion, &mut Wall, &across, &Budget::iterations(200), &mut rng);
+    /// assert!(matches!(err, Err(PlanError::Timeout { .. })));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    ///
     /// # Errors
     /// As [`Planner::plan`].
     pub fn plan<S, V, R>(
