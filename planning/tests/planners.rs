@@ -1482,12 +1482,11 @@ fn lazy_prm_grows_a_wedged_goal_out_of_a_pocket() {
     assert_ne!(default.map(|(i, c, _)| (i, c)), early.map(|(i, c, _)| (i, c)));
 }
 
-/// In [`pocket_6d`], LazyPRM's wedged-end
-/// growth with and without the greedy extension ([`LazyPrmSettings::tree_connect`]): a free
-/// step goes on towards its sample, so a growth turn adds several vertices (the roadmap is
-/// about three times larger when solved) and the plans take no more iterations (449 against
-/// 468 in the median); every path is checked. Off, as by default, the growth is one step a
-/// turn.
+/// In [`pocket_6d`], LazyPRM's wedged-end growth with and without the greedy extension
+/// ([`LazyPrmSettings::tree_connect`]): a free step goes on towards its sample, so a growth
+/// turn adds several vertices (the roadmap is about three times larger when solved) and the
+/// plans take no more iterations (449 against 468 in the median); every path is checked. Off,
+/// as by default, the growth is one step a turn.
 #[test]
 fn lazy_prm_wedged_growth_extends_greedily() {
     let medians = |tree_connect: bool| {
