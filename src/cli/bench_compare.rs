@@ -225,13 +225,34 @@ fn read(path: &Path) -> anyhow::Result<Value> {
     serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))
 }
 
+/// One row of the comparison table, the header included: the family column left-aligned, the
+/// figures right-aligned under their headings.
+fn print_row(cells: [&str; 11]) {
+    let [
+        family,
+        plans,
+        solved_base,
+        solved_new,
+        both,
+        base_ms,
+        new_ms,
+        ratio,
+        geo,
+        faster,
+        same,
+    ] = cells;
+    println!(
+        "{family:<22} {plans:>6} {solved_base:>11} {solved_new:>10} {both:>6} {base_ms:>10} {new_ms:>10} \
+         {ratio:>9} {geo:>9} {faster:>7} {same:>6}"
+    );
+}
+
 pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
     let (base, new) = (read(&a.base)?, read(&a.new)?);
     let out = compare(&base, &new, [&a.base, &a.new])?;
     create_json(a.json.as_deref())?;
     println!("base: {}\nnew:  {}", a.base.display(), a.new.display());
-    println!(
-        "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>7} {:>6}",
+    print_row([
         "family",
         "plans",
         "solved base",
@@ -242,28 +263,27 @@ pub fn run(a: BenchCompareArgs) -> anyhow::Result<()> {
         "new/base",
         "geo mean",
         "faster",
-        "same"
-    );
+        "same",
+    ]);
     let cell = |v: &Value, digits: usize| v.as_f64().map_or("-".to_owned(), |x| format!("{x:.digits$}"));
     let count = |v: &Value| v.as_u64().map_or("-".to_owned(), |n| n.to_string());
     // Families first, then `all`, as `hearth bench plan` prints them.
     let groups = out["groups"].as_object().into_iter().flatten();
     let (all, families): (Vec<_>, Vec<_>) = groups.partition(|(name, _)| name.as_str() == "all");
     for (name, g) in families.into_iter().chain(all) {
-        println!(
-            "{:<22} {:>6} {:>11} {:>10} {:>6} {:>10} {:>10} {:>9} {:>9} {:>7} {:>6}",
-            name,
-            count(&g["plans"]),
-            count(&g["solved_base"]),
-            count(&g["solved_new"]),
-            count(&g["solved_both"]),
-            cell(&g["plan_time_ms_median_base"], 3),
-            cell(&g["plan_time_ms_median_new"], 3),
-            cell(&g["median_ratio"], 3),
-            cell(&g["geometric_mean_ratio"], 3),
-            count(&g["new_faster"]),
-            count(&g["same_plans"])
-        );
+        print_row([
+            name.as_str(),
+            &count(&g["plans"]),
+            &count(&g["solved_base"]),
+            &count(&g["solved_new"]),
+            &count(&g["solved_both"]),
+            &cell(&g["plan_time_ms_median_base"], 3),
+            &cell(&g["plan_time_ms_median_new"], 3),
+            &cell(&g["median_ratio"], 3),
+            &cell(&g["geometric_mean_ratio"], 3),
+            &count(&g["new_faster"]),
+            &count(&g["same_plans"]),
+        ]);
     }
     let u = &out["unmatched"];
     let unmatched: u64 = ["only_in_base", "only_in_new", "skipped_in_one"]
