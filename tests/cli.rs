@@ -645,6 +645,15 @@ fn bench_plan_writes_results_json() {
             &["--fine-resolution", "0"][..],
             "--resolution and --fine-resolution must be positive and finite",
         ),
+        // A spacing that would cut an edge into ~10³⁰⁰ states (it used to run out of memory).
+        (
+            &["--resolution", "1e-300"][..],
+            "is finer than the panda planning space allows",
+        ),
+        (
+            &["--fine-resolution", "1e-9"][..],
+            "is finer than the panda planning space allows",
+        ),
         (&["--escape-share", "0"][..], "--escape-share must be in (0, 1)"),
         (
             &["--no-escape", "--escape-probe", "0.5"][..],

@@ -2,8 +2,9 @@
 
 use std::collections::VecDeque;
 
+use crate::error::Num;
 use crate::error::PlanError;
-use crate::planner::{positive_finite, resolution_or_default};
+use crate::planner::{diameter, positive_finite, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
 
@@ -40,26 +41,32 @@ pub struct MotionValidator<S: Space> {
 
 impl<S: Space> MotionValidator<S> {
     /// A validator that checks states at most `resolution` apart (in the space's distance). A
-    /// resolution that is not positive and finite (0, negative, NaN, infinite) counts as 0.01;
-    /// [`MotionValidator::try_new`] refuses it instead.
+    /// resolution that is not positive and finite (0, negative, NaN, infinite) counts as 0.01,
+    /// and one finer than [`finest_resolution`] as that; [`MotionValidator::try_new`] refuses
+    /// both instead.
     ///
     /// ```
-    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::motion::{MotionValidator, finest_resolution};
     /// use hearth_planning::space::JointSpace;
     ///
     /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
     /// assert_eq!(MotionValidator::new(space.clone(), 0.05).resolution(), 0.05);
     /// assert_eq!(MotionValidator::new(space.clone(), 0.0).resolution(), 0.01);
     /// // An infinite spacing would check no state between an edge's ends.
-    /// assert_eq!(MotionValidator::new(space, f64::INFINITY).resolution(), 0.01);
+    /// assert_eq!(MotionValidator::new(space.clone(), f64::INFINITY).resolution(), 0.01);
+    /// // Nor may an edge take without end.
+    /// assert_eq!(MotionValidator::new(space.clone(), 1e-300).resolution(), finest_resolution(&space));
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn new(space: S, resolution: f64) -> Self {
-        Self::with_resolution(space, resolution_or_default(resolution))
+        let resolution = resolution_or_default(resolution).max(finest_resolution(&space));
+        Self::with_resolution(space, resolution)
     }
 
     /// A validator that checks states at most `resolution` apart, or
-    /// [`PlanError::BadInput`] naming the value when `resolution` is not positive and finite.
+    /// [`PlanError::BadInput`] naming the value when `resolution` is not positive and finite
+    /// or is finer than [`finest_resolution`] (an edge across the space would take more than
+    /// [`MAX_SEGMENTS`] segments: on a Panda's arm, 1 µrad asks for 10⁷ states an edge).
     ///
     /// ```
     /// use hearth_planning::PlanError;
@@ -68,14 +75,15 @@ impl<S: Space> MotionValidator<S> {
     ///
     /// let space = JointSpace::new(&[0.0], &[1.0], &[false])?;
     /// assert_eq!(MotionValidator::try_new(space.clone(), 0.05)?.resolution(), 0.05);
-    /// for bad in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+    /// for bad in [0.0, -0.01, f64::NAN, f64::INFINITY, 1e-300] {
     ///     let err = MotionValidator::try_new(space.clone(), bad).err().unwrap();
     ///     assert!(matches!(err, PlanError::BadInput(ref m) if m.contains("resolution")));
     /// }
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn try_new(space: S, resolution: f64) -> Result<Self, PlanError> {
-        Ok(Self::with_resolution(space, positive_finite("resolution", resolution)?))
+        let resolution = checked_resolution(&space, "resolution", resolution)?;
+        Ok(Self::with_resolution(space, resolution))
     }
 
     fn with_resolution(space: S, resolution: f64) -> Self {
@@ -144,8 +152,10 @@ impl<S: Space> MotionValidator<S> {
     }
 
     /// Number of segments an edge from `a` to `b` is cut into: its length over the resolution,
-    /// rounded up, and at least 1. [`MotionValidator::check_motion`] checks the `segments - 1`
-    /// states between them.
+    /// rounded up, at least 1 and at most [`MAX_SEGMENTS`] (which only an edge longer than the
+    /// space's diameter, from a state outside the bounds, can reach: its states are then
+    /// further apart than the resolution). [`MotionValidator::check_motion`] checks the
+    /// `segments - 1` states between them.
     ///
     /// ```
     /// use hearth_planning::motion::MotionValidator;
@@ -155,11 +165,14 @@ impl<S: Space> MotionValidator<S> {
     /// assert_eq!(mv.segments(&[0.0], &[1.0]), 4);
     /// assert_eq!(mv.segments(&[0.0], &[1.1]), 5);
     /// assert_eq!(mv.segments(&[0.5], &[0.5]), 1);
+    /// assert_eq!(mv.segments(&[0.0], &[1e300]), hearth_planning::motion::MAX_SEGMENTS);
+    /// assert_eq!(mv.segments(&[0.0], &[f64::NAN]), 1);
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn segments(&self, a: &[f64], b: &[f64]) -> u32 {
-        let d = self.space.distance(a, b);
-        ((d / self.resolution).ceil() as u32).max(1)
+        let n = (self.space.distance(a, b) / self.resolution).ceil();
+        // (A NaN length fails the comparison: one segment, as before the cap.)
+        if n > 1.0 { n.min(MAX_SEGMENTS as f64) as u32 } else { 1 }
     }
 
     /// Whether every intermediate state from `a` to `b` is valid. The states go to the
@@ -214,6 +227,50 @@ impl<S: Space> MotionValidator<S> {
         }
         self.batch.is_empty() || validator.first_invalid(&self.batch, dim).is_none()
     }
+}
+
+/// Most segments [`MotionValidator`] cuts one edge into (2²⁰). The finest resolution a space
+/// allows ([`finest_resolution`]) cuts an edge across the whole space into this many, so an
+/// edge's check takes bounded time and memory (its queue holds at most half as many entries)
+/// whatever resolution a caller asks for.
+///
+/// ```
+/// assert_eq!(hearth_planning::motion::MAX_SEGMENTS, 1 << 20);
+/// ```
+pub const MAX_SEGMENTS: u32 = 1 << 20;
+
+/// The finest check resolution usable in `space`: its diameter (twice the distance from its
+/// lower bounds to its centre, the longest edge within the bounds of a space without
+/// continuous coordinates) over [`MAX_SEGMENTS`]; 0 for a space whose diameter is not finite.
+/// About 1.1 · 10⁻⁵ rad for a Panda's arm, 6 · 10⁻⁸ rad for a one-joint space of 2π.
+///
+/// ```
+/// use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
+/// use hearth_planning::space::JointSpace;
+///
+/// let square = JointSpace::new(&[0.0, 0.0], &[3.0, 4.0], &[false, false])?;
+/// assert!((finest_resolution(&square) - 5.0 / MAX_SEGMENTS as f64).abs() < 1e-15);
+/// # Ok::<(), hearth_planning::space::SpaceError>(())
+/// ```
+pub fn finest_resolution<S: Space>(space: &S) -> f64 {
+    let r = diameter(space) / MAX_SEGMENTS as f64;
+    if r.is_finite() { r } else { 0.0 }
+}
+
+/// `resolution` if it is positive, finite and no finer than [`finest_resolution`], else
+/// [`PlanError::BadInput`] naming the setting `what`.
+pub(crate) fn checked_resolution<S: Space>(space: &S, what: &str, resolution: f64) -> Result<f64, PlanError> {
+    let r = positive_finite(what, resolution)?;
+    let finest = finest_resolution(space);
+    if r < finest {
+        return Err(PlanError::BadInput(format!(
+            "{what} is {}; the finest this space allows is {} (an edge across it, {:.3} long, in at most {MAX_SEGMENTS} segments)",
+            Num(r),
+            Num(finest),
+            diameter(space)
+        )));
+    }
+    Ok(r)
 }
 
 /// How many states of an edge [`MotionValidator::check_motion`] hands to the validator at once,

@@ -538,13 +538,20 @@ pub(crate) fn valid_goals<S: Space, V: StateValidator + ?Sized>(
 /// # Ok::<(), hearth_planning::space::SpaceError>(())
 /// ```
 pub fn default_range<S: Space>(space: &S) -> f64 {
+    0.2 * diameter(space)
+}
+
+/// Twice the distance from `space`'s lower bounds to its centre: the longest edge between
+/// states within the bounds of a space without continuous coordinates, and an upper bound on
+/// it otherwise.
+pub(crate) fn diameter<S: Space>(space: &S) -> f64 {
     let centre: Vec<f64> = space
         .lower()
         .iter()
         .zip(space.upper())
         .map(|(l, u)| 0.5 * (l + u))
         .collect();
-    0.2 * 2.0 * space.distance(space.lower(), &centre)
+    2.0 * space.distance(space.lower(), &centre)
 }
 
 /// `value` if it is positive and finite.

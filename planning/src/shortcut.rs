@@ -35,8 +35,8 @@ use rand::{Rng, RngExt};
 
 use crate::birrt::BiRrt;
 use crate::error::PlanError;
-use crate::motion::MotionValidator;
-use crate::planner::{Budget, Goal, Path, PlanRequest, Planner, positive_finite};
+use crate::motion::{MotionValidator, checked_resolution};
+use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
 use crate::space::{Space, steer};
 use crate::trajectory::{Limits, Trajectory, TrajectoryError};
 use crate::validity::StateValidator;
@@ -424,7 +424,8 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 /// an edge that fails is replaced by a BiRRT path between its ends planned at that resolution
 /// (within `budget` for all repairs together). Returns the path and the number of edges
 /// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed, and with
-/// [`PlanError::BadInput`] when `fine_resolution` is not positive and finite.
+/// [`PlanError::BadInput`] when `fine_resolution` is not positive and finite, or finer than
+/// [`finest_resolution`](crate::motion::finest_resolution).
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -462,7 +463,7 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     rng: &mut R,
 ) -> Result<(Path, usize), PlanError> {
     // A resolution of 0 would sample an edge without end.
-    positive_finite("fine_resolution", fine_resolution)?;
+    checked_resolution(space, "fine_resolution", fine_resolution)?;
     let clock = Clock::new(Some(budget));
     let mut fine = MotionValidator::new(space.clone(), fine_resolution);
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(path.states.len());
@@ -665,8 +666,9 @@ pub struct Smoothed {
 /// rest-to-rest timing of the repaired path is returned if it passes; if it fails too, the
 /// edge holding the colliding state is re-planned around that state, a few times (within what
 /// is left of `repair_budget`), and [`PlanError::InvalidMotion`] is returned if no such motion
-/// passes. A `fine_resolution` or `verify_resolution` that is not positive and finite is
-/// [`PlanError::BadInput`], before anything is checked.
+/// passes. A `fine_resolution` or `verify_resolution` that is not positive and finite, or finer
+/// than [`finest_resolution`](crate::motion::finest_resolution), is [`PlanError::BadInput`],
+/// before anything is checked.
 ///
 /// ```
 /// use hearth_planning::motion::MotionValidator;
@@ -709,7 +711,7 @@ pub fn smooth<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         ("verify_resolution", settings.verify_resolution),
     ] {
         if let Some(r) = r {
-            positive_finite(what, r)?;
+            checked_resolution(motion.space(), what, r)?;
         }
     }
     let started = std::time::Instant::now();

@@ -6,9 +6,12 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
 use hearth_planning::obstacles::{Obstacle, ParryScene};
 use hearth_planning::problem::ProblemSet;
+use hearth_planning::shortcut::{self, ShortcutSettings};
 use hearth_planning::space::{JointSpace, Space};
+use hearth_planning::trajectory::Limits;
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, Path, PlanError,
@@ -1043,6 +1046,84 @@ fn bad_time_limit_is_named() {
             "{name}: {r:?}"
         );
     }
+}
+
+/// A resolution far finer than the space allows (1e-300 cut an edge into 2³² states, and the
+/// bisection's queue filled the memory): refused where the caller can be told, raised to the
+/// finest usable spacing where it cannot, so an edge's check stays bounded; the refusals
+/// check nothing.
+#[test]
+fn a_resolution_finer_than_the_space_allows_is_refused_or_raised() {
+    let finest = finest_resolution(&square());
+    assert!(finest > 0.0 && finest < 1e-5, "{finest}");
+    for what in [1e-300, 0.5 * finest] {
+        let r = MotionValidator::try_new(square(), what);
+        assert!(
+            matches!(&r, Err(PlanError::BadInput(m)) if m.contains("resolution") && m.contains("finest")),
+            "{what}: {:?}",
+            r.err()
+        );
+    }
+    assert!(MotionValidator::try_new(square(), finest).is_ok());
+    let mut motion = MotionValidator::new(square(), 1e-300);
+    assert_eq!(motion.resolution(), finest);
+    // The diagonal is the longest edge in the square: at most `MAX_SEGMENTS - 1` states.
+    let mut open = Region {
+        free: |_| true,
+        checks: 0,
+    };
+    assert!(motion.check_motion(&mut open, &[0.0, 0.0], &[1.0, 1.0]));
+    assert!(
+        open.checks < u64::from(MAX_SEGMENTS) && open.checks > 1 << 19,
+        "{}",
+        open.checks
+    );
+    // Post-processing refuses such a re-check spacing before it checks anything.
+    let path = Path {
+        states: vec![vec![0.1, 0.1], vec![0.9, 0.9]],
+    };
+    let mut v = narrow_passage();
+    let r = shortcut::repair(
+        &square(),
+        &mut v,
+        &path,
+        1e-300,
+        std::time::Duration::from_secs(1),
+        &mut Pcg64Mcg::seed_from_u64(1),
+    );
+    assert!(
+        matches!(&r, Err(PlanError::BadInput(m)) if m.contains("fine_resolution")),
+        "{r:?}"
+    );
+    let limits = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![f64::INFINITY; 2]).unwrap();
+    for settings in [
+        ShortcutSettings {
+            fine_resolution: Some(1e-300),
+            ..ShortcutSettings::default()
+        },
+        ShortcutSettings {
+            verify_resolution: Some(1e-300),
+            ..ShortcutSettings::default()
+        },
+    ] {
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let r = shortcut::smooth(
+            shortcut::Smoothing::Parabolic,
+            &mut motion,
+            &mut v,
+            &path,
+            &limits,
+            &settings,
+            std::time::Duration::from_secs(1),
+            &mut Pcg64Mcg::seed_from_u64(1),
+        );
+        assert!(
+            matches!(&r, Err(PlanError::BadInput(m)) if m.contains("finest")),
+            "{:?}",
+            r.err()
+        );
+    }
+    assert_eq!(v.checks, 0);
 }
 
 #[test]

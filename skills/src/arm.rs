@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use hearth_kinematics::parry3d::shape::SharedShape;
 use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatrix, SelfCollisionSettings};
 use hearth_planning::goal::PoseGoal;
+use hearth_planning::motion::finest_resolution;
 use hearth_planning::obstacles::ParryScene;
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
@@ -466,6 +467,8 @@ impl Arm {
     /// let settings = ArmSettings { chain: "arm".into(), support_links: vec![], ..ArmSettings::fetch() };
     /// let arm = Arm::new(&world, robot, settings.clone())?;
     /// assert_eq!(arm.chain().dof(), 5);
+    /// let fine = ArmSettings { resolution: 1e-300, ..settings.clone() };
+    /// assert!(Arm::new(&world, robot, fine).unwrap_err().to_string().contains("finer than"));
     /// let bad = ArmSettings { chain: "leg".into(), ..settings };
     /// assert_eq!(Arm::new(&world, robot, bad).unwrap_err().reason(), "bad_input");
     /// # Ok::<(), hearth_skills::SkillError>(())
@@ -498,6 +501,14 @@ impl Arm {
             },
         );
         let space = JointSpace::from_chain(&chain).map_err(|e| SkillError::BadInput(e.to_string()))?;
+        // Motions are re-checked at a tenth of the resolution.
+        let finest = finest_resolution(&space);
+        if settings.resolution / 10.0 < finest {
+            return Err(SkillError::BadInput(format!(
+                "resolution {:e} is finer than chain `{}` allows: a tenth of it, the fine re-check, must be at least {finest:.3e}",
+                settings.resolution, settings.chain
+            )));
+        }
         let limits = Limits::for_chain(&chain)
             .scaled(settings.velocity_scale, settings.velocity_scale)
             .map_err(|e| SkillError::BadInput(e.to_string()))?;

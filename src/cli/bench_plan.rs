@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
+use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
@@ -99,7 +100,9 @@ pub struct BenchPlanArgs {
     #[arg(long, default_value_t = 1.0 / 32.0)]
     resolution: f64,
     /// Resolution of the repair and the final re-check of every path (rad): at most a tenth of
-    /// `--resolution` (a larger value is lowered to that).
+    /// `--resolution` (a larger value is lowered to that). Neither may be finer than the
+    /// planning space's diameter over 2²⁰ (`hearth_planning::motion::finest_resolution`: about
+    /// 1.2e-5 rad for the Panda's arm), so that no edge takes more than 2²⁰ checks.
     #[arg(long, default_value_t = 0.002)]
     fine_resolution: f64,
     /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch, 0.65 rad
@@ -486,6 +489,24 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         if !setups.contains_key(&set.robot) {
             let s = setup(&set.robot, &set.joint_names, joints.as_deref())
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
+            let space = JointSpace::from_chain(&s.chain).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let finest = finest_resolution(&space);
+            let fine = a.fine_resolution.min(a.resolution / 10.0);
+            let too_fine = if a.resolution < finest {
+                Some(format!("--resolution {:e}", a.resolution))
+            } else {
+                (fine < finest).then(|| {
+                    format!(
+                        "the re-check spacing {fine:e} (the finer of --fine-resolution and a tenth of --resolution)"
+                    )
+                })
+            };
+            if let Some(what) = too_fine {
+                bail!(
+                    "{what} is finer than the {} planning space allows: {finest:.3e} at the finest, so that no edge needs more than {MAX_SEGMENTS} checks",
+                    set.robot
+                );
+            }
             let step = match a.planner {
                 PlannerKind::Birrt => {
                     let birrt = birrt_for(&set.robot, &a);

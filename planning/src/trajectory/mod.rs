@@ -35,6 +35,7 @@ use std::sync::Arc;
 pub use limits::Limits;
 
 use crate::error::Num;
+use crate::motion::finest_resolution;
 use crate::planner::{Path, positive, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
@@ -119,6 +120,16 @@ pub enum TrajectoryError {
     BadResolution {
         /// Its value.
         value: f64,
+    },
+    /// A check resolution finer than the space allows
+    /// ([`finest_resolution`](crate::motion::finest_resolution)): sampling at it could take
+    /// without end.
+    #[error("the check resolution is {v}; the finest this space allows is {f}", v = Num(*.value), f = Num(*.finest))]
+    ResolutionTooFine {
+        /// Its value.
+        value: f64,
+        /// The finest resolution of the space.
+        finest: f64,
     },
     /// A path without states.
     #[error("the path has no states")]
@@ -866,7 +877,7 @@ impl Trajectory {
     /// Appends states (flat, `dim` per state) at most `resolution` apart to `out`, adapting the
     /// time step to the local speed; a `resolution` that is not positive and finite is refused.
     fn discretise<S: Space>(&self, space: &S, resolution: f64, out: &mut Vec<f64>) -> Result<(), TrajectoryError> {
-        usable_resolution(resolution)?;
+        usable_resolution(space, resolution)?;
         discretise_timed(
             self.dim,
             self.duration(),
@@ -882,7 +893,8 @@ impl Trajectory {
     /// Checks every state along the trajectory, at most `resolution` apart, coarse to fine
     /// (midpoints first); `Err(InCollision)` carries the time of the first colliding state
     /// found (not necessarily the earliest one). A resolution that is not positive and finite
-    /// is [`TrajectoryError::BadResolution`], before any state is checked.
+    /// is [`TrajectoryError::BadResolution`], one finer than the space allows
+    /// [`TrajectoryError::ResolutionTooFine`], before any state is checked.
     ///
     /// ```
     /// use hearth_planning::planner::Path;
@@ -909,6 +921,8 @@ impl Trajectory {
     /// assert!(q[0] >= 0.5);
     /// let zero = across.check(&space, &mut Left(0), 0.0);
     /// assert_eq!(zero, Err(TrajectoryError::BadResolution { value: 0.0 }));
+    /// let tiny = across.check(&space, &mut Left(0), 1e-300);
+    /// assert!(matches!(tiny, Err(TrajectoryError::ResolutionTooFine { .. })));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn check<S: Space, V: StateValidator + ?Sized>(
@@ -917,7 +931,7 @@ impl Trajectory {
         validator: &mut V,
         resolution: f64,
     ) -> Result<(), TrajectoryError> {
-        usable_resolution(resolution)?;
+        usable_resolution(space, resolution)?;
         let mut flat = Vec::new();
         let mut times = Vec::new();
         let sample = |t: f64, q: &mut [f64]| self.sample(t, q, None);
@@ -991,12 +1005,19 @@ impl Trajectory {
 /// states, below it so that a slightly faster next step still lands within the spacing.
 const SPACING_AIM: f64 = 0.96;
 
-/// [`TrajectoryError::BadResolution`] unless `resolution` is positive and finite: the check
+/// [`TrajectoryError::BadResolution`] unless `resolution` is positive and finite, and
+/// [`TrajectoryError::ResolutionTooFine`] when it is finer than `space` allows: the check
 /// every sampling of a whole trajectory makes before it samples.
-fn usable_resolution(resolution: f64) -> Result<(), TrajectoryError> {
-    positive(resolution)
-        .map(|_| ())
-        .ok_or(TrajectoryError::BadResolution { value: resolution })
+fn usable_resolution<S: Space>(space: &S, resolution: f64) -> Result<(), TrajectoryError> {
+    positive(resolution).ok_or(TrajectoryError::BadResolution { value: resolution })?;
+    let finest = finest_resolution(space);
+    if resolution < finest {
+        return Err(TrajectoryError::ResolutionTooFine {
+            value: resolution,
+            finest,
+        });
+    }
+    Ok(())
 }
 
 /// Appends states (flat, `dim` per state) of a motion `sample(t, q)` over `[0, duration]`,
