@@ -654,6 +654,10 @@ fn bench_plan_writes_results_json() {
             &["--fine-resolution", "1e-9"][..],
             "is finer than the panda planning space allows",
         ),
+        (
+            &["--range", "1e-9"][..],
+            "is finer than the panda planning space allows",
+        ),
         (&["--escape-share", "0"][..], "--escape-share must be in (0, 1)"),
         (
             &["--no-escape", "--escape-probe", "0.5"][..],

@@ -58,7 +58,8 @@ pub struct BiRrt {
     /// skills were validated with. OMPL's default, 0.2 × the extent, made each extension check
     /// up to ~120 states on MotionBenchMaker problems and cost success. Longer steps suit some
     /// problem sets: `hearth bench plan` takes 0.65 rad for the Panda and 1.2 rad for the
-    /// Fetch (`docs/planning-log.md`).
+    /// Fetch (`docs/planning-log.md`). A step that is not positive and finite, or shorter than
+    /// [`finest_resolution`](crate::motion::finest_resolution), is [`PlanError::BadInput`].
     pub range: Option<f64>,
     /// Dynamic-domain sampling (Yershova, Jaillet, Siméon & LaValle, ICRA 2005): a state whose
     /// extension failed only accepts samples within its domain radius afterwards, so states

@@ -30,7 +30,9 @@ pub struct LazyPrmSettings {
     /// Each new vertex is joined to at most this many nearest vertices (default 10).
     pub k: usize,
     /// Longest roadmap edge; `None` is [`default_range`](crate::planner::default_range)
-    /// (0.2 × the space's extent, OMPL's `maxDistance` default).
+    /// (0.2 × the space's extent, OMPL's `maxDistance` default). An edge length that is not
+    /// positive and finite, or shorter than
+    /// [`finest_resolution`](crate::motion::finest_resolution), is [`PlanError::BadInput`].
     pub range: Option<f64>,
     /// Fewest samples added each time the roadmap has no candidate path (default 50); the
     /// roadmap grows by at least a quarter of its size, so growth is geometric.

@@ -570,11 +570,13 @@ pub(crate) fn resolution_or_default(resolution: f64) -> f64 {
     positive(resolution).unwrap_or(0.01)
 }
 
-/// The step size from a setting: `Some(r)` must be positive and finite, `None` is
+/// The step size from a setting: `Some(r)` must be positive, finite and no shorter than
+/// [`finest_resolution`](crate::motion::finest_resolution) (a straight connection of steps of
+/// 10⁻⁹ rad adds states by the billion before the budget is next looked at), `None` is
 /// [`default_range`] times `scale` (or 1 for a zero-extent space).
 pub(crate) fn resolve_range<S: Space>(space: &S, range: Option<f64>, scale: f64) -> Result<f64, PlanError> {
     match range {
-        Some(r) => positive_finite("range", r),
+        Some(r) => crate::motion::checked_resolution(space, "range", r),
         None => {
             let r = default_range(space) * scale;
             Ok(if r.is_finite() && r > 0.0 { r } else { 1.0 })

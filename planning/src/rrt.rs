@@ -45,7 +45,9 @@ use crate::validity::StateValidator;
 #[serde(default)]
 pub struct Rrt {
     /// Longest step; `None` is [`default_range`](crate::planner::default_range)
-    /// (0.2 × the space's extent, as in OMPL).
+    /// (0.2 × the space's extent, as in OMPL). A step that is not positive and finite, or
+    /// shorter than [`finest_resolution`](crate::motion::finest_resolution), is
+    /// [`PlanError::BadInput`].
     pub range: Option<f64>,
     /// Probability of steering towards a goal instead of a uniform sample (OMPL: 0.05).
     pub goal_bias: f64,

@@ -1123,6 +1123,32 @@ fn a_resolution_finer_than_the_space_allows_is_refused_or_raised() {
             r.err()
         );
     }
+    // So is a planner step that short (BiRRT's straight connection of 10⁻⁹ rad steps added
+    // states by the billion and ran for minutes past a 1 s budget).
+    let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+    let mut rng = Pcg64Mcg::seed_from_u64(1);
+    let (request, budget) = (passage_request(), Budget::time(1.0));
+    let range = Some(1e-9);
+    let rrt = Rrt {
+        range,
+        ..Default::default()
+    };
+    let lazy = LazyPrmSettings {
+        range,
+        ..Default::default()
+    };
+    let results = [
+        rrt.clone().plan(&mut motion, &mut v, &request, &budget, &mut rng),
+        BiRrt::with_range(range).plan(&mut motion, &mut v, &request, &budget, &mut rng),
+        LazyPrm::new(lazy).plan(&mut motion, &mut v, &request, &budget, &mut rng),
+    ];
+    for r in results {
+        assert!(
+            matches!(&r, Err(PlanError::BadInput(m)) if m.contains("range")),
+            "{:?}",
+            r.err()
+        );
+    }
     assert_eq!(v.checks, 0);
 }
 

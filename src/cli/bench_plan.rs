@@ -494,6 +494,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             let fine = a.fine_resolution.min(a.resolution / 10.0);
             let too_fine = if a.resolution < finest {
                 Some(format!("--resolution {:e}", a.resolution))
+            } else if let Some(r) = a.range.filter(|&r| r < finest) {
+                Some(format!("--range {r:e}"))
             } else {
                 (fine < finest).then(|| {
                     format!(
@@ -503,7 +505,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             };
             if let Some(what) = too_fine {
                 bail!(
-                    "{what} is finer than the {} planning space allows: {finest:.3e} at the finest, so that no edge needs more than {MAX_SEGMENTS} checks",
+                    "{what} is finer than the {} planning space allows: {finest:.3e} at the finest (its diameter over {MAX_SEGMENTS}), so that no edge or straight connection takes more than that many steps",
                     set.robot
                 );
             }
