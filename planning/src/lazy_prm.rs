@@ -457,7 +457,7 @@ impl Roadmap {
             return i as u32;
         }
         let v = self.nn.insert(q) as u32;
-        let mut adjacent = Vec::with_capacity(k);
+        let mut adjacent = Vec::with_capacity(near.len());
         for &u in &near {
             let d = space.distance(self.nn.state(u), q);
             if d <= range {
@@ -476,7 +476,7 @@ impl Roadmap {
     /// yet (and whose edge was not found invalid).
     fn connect<S: Space>(&mut self, space: &S, v: u32, k: usize, range: f64) {
         let q = self.nn.state(v as usize).to_vec();
-        for u in self.nn.k_nearest(space, &q, k + 1) {
+        for u in self.nn.k_nearest(space, &q, k.saturating_add(1)) {
             let u = u as u32;
             if u == v
                 || self.adjacency[v as usize].iter().any(|&(w, _)| w == u)
@@ -869,7 +869,7 @@ impl<S: Space> Planner<S> for LazyPrm {
             }
             let grow = self.settings.batch.max(roadmap.nn.len() / 4).max(1);
             // A query end whose part of the roadmap stays small once the roadmap is not.
-            let wedged = if tree_share > 0.0 && roadmap.nn.len() >= 4 * self.settings.batch.max(1) {
+            let wedged = if tree_share > 0.0 && roadmap.nn.len() >= self.settings.batch.max(1).saturating_mul(4) {
                 let limit = roadmap.nn.len() / 8;
                 [
                     roadmap.wedged_part(0, &[start], limit),

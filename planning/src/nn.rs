@@ -386,7 +386,7 @@ impl NearestNeighbors {
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn k_nearest<S: Space>(&mut self, space: &S, q: &[f64], k: usize) -> Vec<usize> {
-        let mut out = Vec::with_capacity(k);
+        let mut out = Vec::with_capacity(k.min(self.len()));
         self.k_nearest_into(space, q, k, &mut out);
         out
     }
@@ -415,7 +415,8 @@ impl NearestNeighbors {
         }
         self.prepare(space);
         let mut heap = std::mem::take(&mut self.heap);
-        heap.reserve(k + 1);
+        // (No more than the states held: `k` is a setting, and may be huge.)
+        heap.reserve(k.min(self.len()).saturating_add(1));
         let mut c = KNearest { k, heap };
         self.search(space, q, &mut c);
         let mut found = c.heap.into_vec();

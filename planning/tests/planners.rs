@@ -1152,6 +1152,41 @@ fn a_resolution_finer_than_the_space_allows_is_refused_or_raised() {
     assert_eq!(v.checks, 0);
 }
 
+/// LazyPRM settings that are huge but valid plan like any others, within their budget: a `k`
+/// of `usize::MAX` reserved that many neighbours (a capacity-overflow panic), and a batch
+/// near `usize::MAX` overflowed the wedged-part test.
+#[test]
+fn huge_lazy_prm_settings_stay_within_the_budget() {
+    for settings in [
+        LazyPrmSettings {
+            k: usize::MAX,
+            ..Default::default()
+        },
+        LazyPrmSettings {
+            k: 1 << 40,
+            ..Default::default()
+        },
+        LazyPrmSettings {
+            batch: usize::MAX / 3,
+            ..Default::default()
+        },
+    ] {
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let r = LazyPrm::new(settings.clone()).plan(
+            &mut motion,
+            &mut narrow_passage(),
+            &passage_request(),
+            &Budget::iterations(2_000),
+            &mut Pcg64Mcg::seed_from_u64(1),
+        );
+        assert!(
+            matches!(&r, Ok(_) | Err(PlanError::Timeout { .. })),
+            "{settings:?}: {:?}",
+            r.err()
+        );
+    }
+}
+
 #[test]
 fn invalid_start_and_goals() {
     let in_wall = vec![0.5, 0.1];
