@@ -46,8 +46,16 @@ fn run(input: &InputParameter<0>, n: usize, sweeps: usize) -> Result<Generated, 
     match otg.calculate(input, &mut trajectory) {
         Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => Ok(trajectory),
         Ok(other) => Err(TrajectoryError::Generator(format!("{other:?}"))),
-        Err(e) => Err(TrajectoryError::Generator(e.to_string())),
+        Err(e) => Err(TrajectoryError::Generator(without_input_dump(&e.to_string()))),
     }
+}
+
+/// The generator's error message without the dump of its whole input that follows `input:`
+/// (every limit and state printed with 16 decimals: kilobytes for a limit of 10³⁰⁰).
+fn without_input_dump(message: &str) -> String {
+    let head = message.split_once("input:").map_or(message, |(head, _)| head);
+    head.trim_end_matches(|c: char| c.is_whitespace() || c == ',')
+        .to_owned()
 }
 
 /// The time-optimal motion from `(q0, v0)` to `(q1, v1)` (accelerations zero at both ends)
@@ -138,5 +146,26 @@ pub(crate) fn knots(trajectory: &Generated, out: &mut Vec<f64>) {
             }
             out.extend(p.t_sum.iter().map(|t| from + t));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Zero limits (below the generator's precision) fail with the generator's reason and
+    /// without the dump of its input.
+    #[test]
+    fn generator_errors_leave_out_the_input_dump() {
+        let limits = Limits::new(vec![1e-300; 2], vec![1.0; 2], vec![10.0; 2]).unwrap();
+        let err = between(&[0.0; 2], &[0.0; 2], &[1.0, -1.0], &[0.0; 2], &limits, Sync::Time).unwrap_err();
+        let text = err.to_string();
+        assert!(text.starts_with("the trajectory generator failed: "), "{text}");
+        assert!(
+            !text.contains("inp.") && !text.contains("input") && text.len() < 200,
+            "{text}"
+        );
+        assert_eq!(without_input_dump("a, b, input: \n x"), "a, b");
+        assert_eq!(without_input_dump("no dump"), "no dump");
     }
 }
