@@ -36,6 +36,7 @@ use std::path::{Path, PathBuf};
 use parry3d::math::{Pose, Rotation, Vector};
 use serde::{Deserialize, Serialize};
 
+use crate::error::Num;
 use crate::obstacles::{Obstacle, ParryScene};
 
 /// How far a quaternion's norm may be from 1 before it is rejected.
@@ -110,19 +111,19 @@ pub enum Defect {
         found: usize,
     },
     /// A NaN or infinite number.
-    #[error("is not finite ({0})")]
+    #[error("is not finite ({})", Num(*.0))]
     NotFinite(f64),
     /// A quaternion whose norm is not 1 (within [`QUATERNION_NORM_TOLERANCE`]); includes zero.
-    #[error("is not a unit quaternion (norm {0})")]
+    #[error("is not a unit quaternion (norm {})", Num(*.0))]
     NotUnitQuaternion(f64),
     /// A negative size (radius, half-extent, half-length).
-    #[error("is negative ({0})")]
+    #[error("is negative ({})", Num(*.0))]
     Negative(f64),
     /// A list that must not be empty is empty.
     #[error("is empty")]
     Empty,
     /// An obstacle coordinate or size beyond ±[`MAX_EXTENT`].
-    #[error("is {0}, beyond ±{max} m", max = MAX_EXTENT)]
+    #[error("is {}, beyond ±{max} m", Num(*.0), max = MAX_EXTENT)]
     TooLarge(f64),
     /// A field that the obstacle's `kind` does not have (a `radius` on a box): a file that
     /// sets it meant another kind or another field.
