@@ -309,6 +309,12 @@ fn non_finite_values() {
         *radius = f64::INFINITY;
     }
     assert_eq!(set.validate().unwrap_err().field(), Some("obstacles[1].radius"));
+    // A huge number is named as a short one.
+    let e = ProblemSet::from_json_str(&GOOD.replace(r#""radius": 0.2"#, r#""radius": 1e300"#)).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "<string>: problem 5: obstacles[1].radius is 1e300, beyond ±1000000 m"
+    );
 }
 
 #[test]
