@@ -96,6 +96,9 @@ impl PoseGoal {
     /// for q in found.states() {
     ///     assert!(q[0] > 0.0 && (ik.tool_pose(q).unwrap().translation.vector - point.coords).norm() < 1e-3);
     /// }
+    /// // Every solution that 4 calls find, however many are asked for.
+    /// let all = PoseGoal { solutions: usize::MAX, max_calls: 4, ..goal.clone() };
+    /// assert!(all.sample(&mut ik, &mut Left(true), &seed, &mut rng).unwrap().states().len() <= 4);
     /// let none = PoseGoal { max_calls: 2, ..goal };
     /// let e = none.sample(&mut ik, &mut Left(false), &seed, &mut rng).unwrap_err();
     /// assert!(matches!(e, PlanError::NoGoalConfiguration { .. }));
@@ -107,7 +110,8 @@ impl PoseGoal {
         seed: &[f64],
         rng: &mut R,
     ) -> Result<Goal, PlanError> {
-        let mut found: Vec<Vec<f64>> = Vec::with_capacity(self.solutions);
+        // (Room for what the calls can find, not for a huge `solutions`.)
+        let mut found: Vec<Vec<f64>> = Vec::with_capacity(self.solutions.min(self.max_calls).min(64));
         let mut last_error = None;
         let mut start = seed.to_vec();
         for call in 0..self.max_calls.max(1) {
