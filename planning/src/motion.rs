@@ -242,7 +242,7 @@ pub const MAX_SEGMENTS: u32 = 1 << 20;
 /// The finest check resolution usable in `space`: its diameter (twice the distance from its
 /// lower bounds to its centre, the longest edge within the bounds of a space without
 /// continuous coordinates) over [`MAX_SEGMENTS`]; 0 for a space whose diameter is not finite.
-/// About 1.1 · 10⁻⁵ rad for a Panda's arm, 6 · 10⁻⁸ rad for a one-joint space of 2π.
+/// About 1.2 · 10⁻⁵ rad for a Panda's arm, 6 · 10⁻⁶ rad for one continuous joint.
 ///
 /// ```
 /// use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
@@ -250,6 +250,9 @@ pub const MAX_SEGMENTS: u32 = 1 << 20;
 ///
 /// let square = JointSpace::new(&[0.0, 0.0], &[3.0, 4.0], &[false, false])?;
 /// assert!((finest_resolution(&square) - 5.0 / MAX_SEGMENTS as f64).abs() < 1e-15);
+/// // A continuous joint's longest edge is half a turn; the diameter counts a whole one.
+/// let wheel = JointSpace::new(&[0.0], &[0.0], &[true])?;
+/// assert!((finest_resolution(&wheel) - 2.0 * std::f64::consts::PI / MAX_SEGMENTS as f64).abs() < 1e-15);
 /// # Ok::<(), hearth_planning::space::SpaceError>(())
 /// ```
 pub fn finest_resolution<S: Space>(space: &S) -> f64 {

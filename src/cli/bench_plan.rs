@@ -108,7 +108,8 @@ pub struct BenchPlanArgs {
     /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch, 0.65 rad
     /// for the Panda and its own default otherwise (0.02 × the space's extent); RRT takes 6 rad
     /// for the Panda and the Fetch and its default otherwise; LazyPRM 4 rad for the Fetch and
-    /// its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`.
+    /// its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No
+    /// shorter than the finest resolution (`--fine-resolution`).
     #[arg(long)]
     range: Option<f64>,
     /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
