@@ -700,13 +700,23 @@ fn link_shape(link: &Link) -> Option<LinkShape> {
             origin: one.shape_origin,
         }),
         many => Some(LinkShape {
-            shape: SharedShape::compound(
-                many.iter()
-                    .map(|c| (to_pose(&c.shape_origin), c.shape.clone()))
-                    .collect(),
-            ),
+            shape: SharedShape::compound(many.iter().flat_map(compound_parts).collect()),
             origin: Isometry3::identity(),
         }),
+    }
+}
+
+/// The parts that collision element `c` adds to its link's compound shape. A compound cannot
+/// hold composite shapes (parry panics on them), so a convex decomposition gives its convex
+/// parts and a triangle mesh its triangles, each placed where the element puts it.
+fn compound_parts(c: &Collision) -> Vec<(parry3d::math::Pose, SharedShape)> {
+    let at = to_pose(&c.shape_origin);
+    if let Some(compound) = c.shape.as_compound() {
+        compound.shapes().iter().map(|(p, s)| (at * *p, s.clone())).collect()
+    } else if let Some(mesh) = c.shape.as_trimesh() {
+        mesh.triangles().map(|t| (at, SharedShape::new(t))).collect()
+    } else {
+        vec![(at, c.shape.clone())]
     }
 }
 

@@ -464,6 +464,56 @@ fn collision_modes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A link with a mesh and a second collision element gets one compound in every mode: a
+/// compound cannot hold a convex decomposition or a triangle mesh (parry panicked on the
+/// nesting when the URDF was loaded), so their convex parts or triangles become its parts,
+/// placed where the element puts them.
+#[test]
+fn a_mesh_beside_another_element_joins_one_compound_in_every_mode() {
+    let dir = fresh_dir("mesh_and_box");
+    write_cubes(&dir);
+    let text = r#"<robot name="meshy">
+  <link name="body">
+    <collision><origin xyz="0 0 -1"/><geometry><mesh filename="cube.obj"/></geometry></collision>
+    <collision><origin xyz="0 0 1"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision>
+  </link>
+</robot>"#;
+    for (mode, least) in [
+        (MeshCollision::ConvexHull, 2),
+        (MeshCollision::ConvexDecomposition, 2),
+        (MeshCollision::TriMesh, 13),
+    ] {
+        let opts = LoadOptions {
+            mesh_collision: mode,
+            ..Default::default()
+        };
+        let m = RobotModel::from_urdf_str_with(text, "two.urdf", Some(&dir), &opts)
+            .unwrap_or_else(|e| panic!("{mode:?}: {e}"));
+        let shape = &m.link_shape(0).unwrap().shape;
+        let compound = shape.as_compound().expect("a compound");
+        assert!(
+            compound.shapes().len() >= least,
+            "{mode:?}: {} parts",
+            compound.shapes().len()
+        );
+        assert!(
+            compound.shapes().iter().all(|(_, s)| s.as_composite_shape().is_none()),
+            "{mode:?}"
+        );
+        // The cube below (moved down by 1) and the small box above.
+        let aabb = shape.compute_local_aabb();
+        assert!(
+            (aabb.mins.z + 1.5).abs() < 1e-4 && (aabb.maxs.z - 1.05).abs() < 1e-4,
+            "{mode:?}: {aabb:?}"
+        );
+        assert!(
+            (aabb.mins.x + 0.5).abs() < 1e-4 && (aabb.maxs.x - 0.5).abs() < 1e-4,
+            "{mode:?}: {aabb:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad files
 // ---------------------------------------------------------------------------------------------

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, links_touch, to_pose};
+use hearth_kinematics::{
+    Chain, LoadOptions, MeshCollision, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, links_touch, to_pose,
+};
 use hearth_planning::obstacles::{Obstacle, ParryScene};
 use hearth_planning::problem::ProblemSet;
 use hearth_planning::validity::{RobotValidity, StateValidator};
@@ -184,6 +186,64 @@ fn random_clutter_matches_brute_force() {
             "seed {seed}: {valid} valid / {invalid} invalid"
         );
     }
+}
+
+/// A link whose collision is a mesh beside a box (one compound of the mesh's convex parts or
+/// triangles and the box, see `hearth_kinematics`) is checked like any other: the same
+/// answers as the exact reference, with the mesh as a convex decomposition and as a triangle
+/// mesh (whose surface alone collides).
+#[test]
+fn a_link_of_a_mesh_and_a_box_matches_brute_force() {
+    let dir = std::env::temp_dir().join(format!("hearth_vb_mesh_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = String::new();
+    for (x, y, z) in [
+        (-1, -1, -1),
+        (1, -1, -1),
+        (1, 1, -1),
+        (-1, 1, -1),
+        (-1, -1, 1),
+        (1, -1, 1),
+        (1, 1, 1),
+        (-1, 1, 1),
+    ] {
+        obj += &format!("v {} {} {}\n", 0.06 * x as f64, 0.06 * y as f64, 0.06 * z as f64);
+    }
+    for f in [
+        "1 3 2", "1 4 3", "5 6 7", "5 7 8", "1 2 6", "1 6 5", "3 4 8", "3 8 7", "2 3 7", "2 7 6", "1 5 8", "1 8 4",
+    ] {
+        obj += &format!("f {f}\n");
+    }
+    std::fs::write(dir.join("block.obj"), obj).unwrap();
+    let urdf = r#"<robot name="two">
+  <link name="base"/>
+  <link name="upper"><collision><origin xyz="0 0 0.25"/><geometry><cylinder radius="0.04" length="0.5"/></geometry></collision></link>
+  <link name="fore">
+    <collision><origin xyz="0.3 0 0"/><geometry><mesh filename="block.obj"/></geometry></collision>
+    <collision><origin xyz="0.15 0 0"/><geometry><box size="0.3 0.04 0.04"/></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.05"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-2.5" upper="2.5" effort="1" velocity="1"/></joint>
+</robot>"#;
+    for mode in [MeshCollision::ConvexDecomposition, MeshCollision::TriMesh] {
+        let opts = LoadOptions {
+            mesh_collision: mode,
+            ..Default::default()
+        };
+        let m = RobotModel::from_urdf_str_with(urdf, "two.urdf", Some(&dir), &opts).unwrap();
+        let chain = Chain::new(&m, &["j1", "j2"]).unwrap();
+        let acm = SelfCollisionMatrix::adjacent_only(&m);
+        let qs = random_configurations(&chain, 21, 2000);
+        let scene = ParryScene::new(cluttered(5, 16));
+        let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
+        let mut r = Reference::new(&chain, &acm, scene);
+        let (valid, invalid) = compare(&mut v, &mut r, &qs);
+        assert!(
+            valid > 100 && invalid > 100,
+            "{mode:?}: {valid} valid / {invalid} invalid"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
