@@ -123,7 +123,7 @@ pub enum KinematicsError {
         upper: f64,
     },
     /// A number in the model is NaN, infinite where it must be finite, or out of its range.
-    #[error("{source_name}: {element}: {what} is {value}, {expected}")]
+    #[error("{source_name}: {element}: {what} is {v}, {expected}", v = Num(*.value))]
     InvalidValue {
         /// File name of the URDF.
         source_name: String,
@@ -278,3 +278,27 @@ pub enum KinematicsError {
 /// # Ok::<(), KinematicsError>(())
 /// ```
 pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;
+
+/// A number as error messages show it: as Rust prints it when that is short, in scientific
+/// notation when it is huge or tiny (a value of 10³⁰ would otherwise print 31 digits).
+///
+/// ```
+/// use hearth_kinematics::Num;
+/// assert_eq!(Num(1e30).to_string(), "1e30");
+/// assert_eq!(Num(0.25).to_string(), "0.25");
+/// assert_eq!(Num(-2e-7).to_string(), "-2e-7");
+/// assert_eq!(Num(f64::NAN).to_string(), "NaN");
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}

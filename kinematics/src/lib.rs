@@ -51,7 +51,7 @@ mod urdf;
 pub use builtin::{BUILTIN_ROBOTS, BuiltinRobot, builtin_names};
 pub use chain::{Chain, wrap_angle};
 pub use convert::{from_pose, to_pose, to_vector};
-pub use error::{KinematicsError, Result};
+pub use error::{KinematicsError, Num, Result};
 pub use fk::FkSubset;
 pub use ik::dls::damped_least_squares_step;
 pub use ik::{IkError, IkMethod, IkSettings, IkSolution, IkSolver, IkTarget};

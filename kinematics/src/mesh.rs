@@ -8,6 +8,7 @@ use parry3d::shape::SharedShape;
 
 use crate::error::{KinematicsError, Result};
 use crate::model::TriangleMesh;
+use crate::urdf::MAX_LENGTH;
 
 /// How a mesh becomes a collision shape.
 ///
@@ -98,6 +99,12 @@ pub fn load_mesh(path: &Path, scale: &Vector3<f64>) -> Result<TriangleMesh> {
             message: "no usable triangles (empty, or non-finite vertices)".into(),
         });
     }
+    if let Some(c) = out.vertices.iter().flatten().find(|c| f64::from(c.abs()) > MAX_LENGTH) {
+        return Err(KinematicsError::MeshLoad {
+            path: path.to_path_buf(),
+            message: format!("a vertex coordinate is {c:e} m (scaled), beyond ±{MAX_LENGTH} m"),
+        });
+    }
     Ok(out)
 }
 
@@ -112,8 +119,13 @@ pub(crate) fn mesh_shape(mesh: &TriangleMesh, mode: MeshCollision, uri: &str) ->
         MeshCollision::ConvexHull => SharedShape::convex_hull(&points)
             .ok_or_else(|| fail("degenerate mesh: its convex hull has no volume".into())),
         MeshCollision::ConvexDecomposition => {
-            let shape = SharedShape::convex_decomposition(&points, &mesh.triangles);
-            Ok(shape)
+            // The decomposition panics on a mesh without volume (it builds an empty compound):
+            // refuse those as the hull does, and contain any other panic of it.
+            if SharedShape::convex_hull(&points).is_none() {
+                return Err(fail("degenerate mesh: its convex hull has no volume".into()));
+            }
+            std::panic::catch_unwind(|| SharedShape::convex_decomposition(&points, &mesh.triangles))
+                .map_err(|_| fail("the convex decomposition failed on this mesh".into()))
         }
         MeshCollision::TriMesh => SharedShape::trimesh(points, mesh.triangles.clone())
             .map_err(|e| fail(format!("invalid triangle mesh: {e:?}"))),

@@ -733,7 +733,7 @@ fn pose(p: &urdf_rs::Pose, source_name: &str, element: &str) -> Result<Isometry3
 
 /// Largest length (m) or coordinate accepted: far beyond any robot, and well inside the f32
 /// range that parry and rapier compute in.
-const MAX_LENGTH: f64 = 1e4;
+pub(crate) const MAX_LENGTH: f64 = 1e4;
 
 fn finite3(v: &[f64; 3], source_name: &str, element: &str, what: &'static str) -> Result<()> {
     match v.iter().find(|x| x.is_nan() || x.abs() > MAX_LENGTH) {

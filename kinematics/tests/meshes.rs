@@ -518,6 +518,53 @@ fn a_mesh_beside_another_element_joins_one_compound_in_every_mode() {
 // Bad files
 // ---------------------------------------------------------------------------------------------
 
+/// Meshes that load as triangles but make no usable collision shape are refused with the
+/// file named, in every mode where they would break it: all vertices on a line (the convex
+/// decomposition panicked on an empty compound), and a vertex 10³⁰ m out (within the f32
+/// range, beyond the ±10⁴ m the loader allows for any length).
+#[test]
+fn degenerate_and_far_meshes_are_mesh_load_errors() {
+    let dir = fresh_dir("degenerate");
+    std::fs::write(dir.join("line.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        dir.join("far.obj"),
+        "v 1e30 0 0\nv 1 0 0\nv 1 1 1\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    for (file, modes) in [
+        (
+            "line.obj",
+            &[MeshCollision::ConvexHull, MeshCollision::ConvexDecomposition][..],
+        ),
+        (
+            "far.obj",
+            &[
+                MeshCollision::ConvexHull,
+                MeshCollision::ConvexDecomposition,
+                MeshCollision::TriMesh,
+            ][..],
+        ),
+    ] {
+        for &mode in modes {
+            let opts = LoadOptions {
+                mesh_collision: mode,
+                ..Default::default()
+            };
+            let e = RobotModel::from_urdf_str_with(&mesh_urdf(file, ""), "m.urdf", Some(&dir), &opts)
+                .err()
+                .unwrap_or_else(|| panic!("{file} {mode:?} should not load"));
+            assert!(
+                matches!(&e, KinematicsError::MeshLoad { path, .. } if path.ends_with(file)),
+                "{file} {mode:?}: {e:?}"
+            );
+        }
+    }
+    // Out-of-range numbers in the URDF itself are named short.
+    let e = RobotModel::from_urdf_str(&mesh_urdf("line.obj", r#"scale="1e30 1 1""#), Some(&dir)).unwrap_err();
+    assert!(e.to_string().contains("scale x is 1e30,"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn empty_or_garbage_stl_is_a_mesh_load_error() {
     let dir = fresh_dir("garbage");

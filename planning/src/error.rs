@@ -102,21 +102,8 @@ pub(crate) fn bad_state(what: &str, e: crate::space::SpaceError) -> PlanError {
     PlanError::BadInput(format!("{what}: {e}"))
 }
 
-/// A number in an error message: as Rust prints it when that is short, in scientific notation
-/// when it is huge or tiny (a coordinate of 10³⁰⁸ would otherwise print 309 digits).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Num(pub(crate) f64);
-
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
-        }
-    }
-}
+/// A number in an error message, short (the kinematics crate's formatter).
+pub(crate) use hearth_kinematics::Num;
 
 #[cfg(test)]
 mod tests {
