@@ -3,7 +3,10 @@
 //!
 //! Cases: 300 by default, or `PROPTEST_CASES`. Failing inputs are printed (not persisted).
 
-use hearth_kinematics::{JointKind, RobotModel};
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use hearth_kinematics::{JointKind, LoadOptions, MeshCollision, RobotModel};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 
@@ -383,8 +386,91 @@ fn base_robot_is_valid() {
     assert!(names(BASE.as_bytes()).len() > 40);
 }
 
+/// [`BASE`] with meshes: one beside the upper arm's cylinder and sphere (a link's compound of
+/// several elements, which a convex decomposition or a triangle mesh must not nest in) and one
+/// alone as the wrist's collision, read from [`mesh_dir`].
+fn base_with_meshes() -> String {
+    BASE.replacen(
+        r#"<collision><origin xyz="0 0 0.4"/><geometry><sphere radius="0.05"/></geometry></collision>"#,
+        r#"<collision><origin xyz="0 0 0.4"/><geometry><sphere radius="0.05"/></geometry></collision>
+    <collision><origin xyz="0 0 0.3"/><geometry><mesh filename="cube.obj" scale="0.05 0.05 0.05"/></geometry></collision>"#,
+        1,
+    )
+    .replacen(
+        r#"<link name="wrist">
+    <collision><geometry><sphere radius="0.04"/></geometry></collision>"#,
+        r#"<link name="wrist">
+    <collision><geometry><mesh filename="cube.obj" scale="0.04 0.04 0.04"/></geometry></collision>"#,
+        1,
+    )
+}
+
+/// A folder (made once per process) holding `cube.obj`, the cube [-1, 1]³.
+fn mesh_dir() -> &'static PathBuf {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("hearth_urdf_fuzz_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut obj = String::new();
+        for i in 0..8 {
+            let c = |bit: i32| if i & bit == 0 { -1 } else { 1 };
+            obj += &format!("v {} {} {}\n", c(1), c(2), c(4));
+        }
+        for f in [
+            "1 3 2", "2 3 4", "5 6 7", "6 8 7", "1 2 5", "2 6 5", "3 7 4", "4 7 8", "1 5 3", "3 5 7", "2 4 6", "4 8 6",
+        ] {
+            obj += &format!("f {f}\n");
+        }
+        std::fs::write(dir.join("cube.obj"), obj).unwrap();
+        dir
+    })
+}
+
+const MESH_MODES: [MeshCollision; 3] = [
+    MeshCollision::ConvexHull,
+    MeshCollision::ConvexDecomposition,
+    MeshCollision::TriMesh,
+];
+
+#[test]
+fn base_robot_with_meshes_is_valid_in_every_mesh_mode() {
+    let text = base_with_meshes();
+    assert_eq!(text.matches("<mesh").count(), 2);
+    for mode in MESH_MODES {
+        let opts = LoadOptions {
+            mesh_collision: mode,
+            ..Default::default()
+        };
+        let m = RobotModel::from_urdf_str_with(&text, "fuzz.urdf", Some(mesh_dir()), &opts).unwrap();
+        check_model(&m, &text).unwrap();
+    }
+}
+
 proptest! {
     #![proptest_config(config())]
+
+    #[test]
+    fn mutated_urdf_with_meshes_never_panics_in_any_mesh_mode(
+        mutations in prop::collection::vec(mutation(), 1..5),
+        mode in 0..MESH_MODES.len(),
+    ) {
+        let mut bytes = base_with_meshes().into_bytes();
+        for m in &mutations {
+            apply(&mut bytes, m);
+        }
+        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let opts = LoadOptions {
+            mesh_collision: MESH_MODES[mode],
+            ..Default::default()
+        };
+        let result =
+            std::panic::catch_unwind(|| RobotModel::from_urdf_str_with(&text, "fuzz.urdf", Some(mesh_dir()), &opts));
+        match result {
+            Err(_) => prop_assert!(false, "from_urdf_str_with ({:?}) panicked on:\n{}", MESH_MODES[mode], text),
+            Ok(Ok(model)) => check_model(&model, &text)?,
+            Ok(Err(e)) => prop_assert!(!e.to_string().is_empty()),
+        }
+    }
 
     #[test]
     fn mutated_urdf_never_panics_and_accepted_models_are_consistent(
