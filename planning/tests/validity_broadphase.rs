@@ -160,6 +160,13 @@ fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize,
     (valid, expected.len() - valid)
 }
 
+/// [`compare`] with a fresh `RobotValidity` and reference for `chain` among `scene`.
+fn compare_in(chain: &Chain, acm: &SelfCollisionMatrix, scene: ParryScene, qs: &[Vec<f64>]) -> (usize, usize) {
+    let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
+    let mut r = Reference::new(chain, acm, scene);
+    compare(&mut v, &mut r, qs)
+}
+
 fn random_configurations(chain: &Chain, seed: u64, n: usize) -> Vec<Vec<f64>> {
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
     (0..n)
@@ -178,9 +185,7 @@ fn random_clutter_matches_brute_force() {
     for (seed, n, margin) in [(1u64, 24usize, 0.0f32), (2, 12, 0.0), (3, 24, 0.02)] {
         let obstacles = cluttered(seed, n);
         let scene = ParryScene::new(obstacles.clone()).with_margin(margin);
-        let mut v = RobotValidity::new(arm.clone(), acm.clone(), Arc::new(scene.clone()));
-        let mut r = Reference::new(&arm, &acm, scene);
-        let (valid, invalid) = compare(&mut v, &mut r, &qs);
+        let (valid, invalid) = compare_in(&arm, &acm, scene, &qs);
         assert!(
             valid > 100 && invalid > 100,
             "seed {seed}: {valid} valid / {invalid} invalid"
@@ -234,10 +239,7 @@ fn a_link_of_a_mesh_and_a_box_matches_brute_force() {
         let chain = Chain::new(&m, &["j1", "j2"]).unwrap();
         let acm = SelfCollisionMatrix::adjacent_only(&m);
         let qs = random_configurations(&chain, 21, 2000);
-        let scene = ParryScene::new(cluttered(5, 16));
-        let mut v = RobotValidity::new(chain.clone(), acm.clone(), Arc::new(scene.clone()));
-        let mut r = Reference::new(&chain, &acm, scene);
-        let (valid, invalid) = compare(&mut v, &mut r, &qs);
+        let (valid, invalid) = compare_in(&chain, &acm, ParryScene::new(cluttered(5, 16)), &qs);
         assert!(
             valid > 100 && invalid > 100,
             "{mode:?}: {valid} valid / {invalid} invalid"
