@@ -121,9 +121,8 @@ pub enum TrajectoryError {
         /// Its value.
         value: f64,
     },
-    /// A check resolution finer than the space allows
-    /// ([`finest_resolution`](crate::motion::finest_resolution)): sampling at it could take
-    /// without end.
+    /// A check resolution finer than the space allows ([`finest_resolution`]): sampling at it
+    /// could take without end.
     #[error("the check resolution is {v}; the finest this space allows is {f}", v = Num(*.value), f = Num(*.finest))]
     ResolutionTooFine {
         /// Its value.
