@@ -312,6 +312,7 @@ fn selected(selectors: &[(String, Option<u32>)], family: &str, id: u32) -> bool 
 
 struct RobotSetup {
     chain: Chain,
+    space: JointSpace,
     limits: Limits,
     matrix: SelfCollisionMatrix,
     reference: Vec<f64>,
@@ -369,6 +370,7 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
     }
     Ok(RobotSetup {
         limits: Limits::for_chain(&chain),
+        space: JointSpace::from_chain(&chain).map_err(|e| anyhow::anyhow!("{e}"))?,
         chain,
         matrix,
         reference,
@@ -409,6 +411,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     {
         bail!("--resolution and --fine-resolution must be positive and finite");
     }
+    // Paths are repaired and re-checked at least ten times finer than they were planned.
+    let fine_resolution = a.fine_resolution.min(a.resolution / 10.0);
     if a.iterations == Some(0) {
         bail!("--iterations must be positive");
     }
@@ -490,17 +494,15 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         if !setups.contains_key(&set.robot) {
             let s = setup(&set.robot, &set.joint_names, joints.as_deref())
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
-            let space = JointSpace::from_chain(&s.chain).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let finest = finest_resolution(&space);
-            let fine = a.fine_resolution.min(a.resolution / 10.0);
+            let finest = finest_resolution(&s.space);
             let too_fine = if a.resolution < finest {
                 Some(format!("--resolution {:e}", a.resolution))
             } else if let Some(r) = a.range.filter(|&r| r < finest) {
                 Some(format!("--range {r:e}"))
             } else {
-                (fine < finest).then(|| {
+                (fine_resolution < finest).then(|| {
                     format!(
-                        "the re-check spacing {fine:e} (the finer of --fine-resolution and a tenth of --resolution)"
+                        "the re-check spacing {fine_resolution:e} (the finer of --fine-resolution and a tenth of --resolution)"
                     )
                 })
             };
@@ -561,7 +563,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             setups.insert(set.robot.clone(), s);
         }
         let rs = &setups[&set.robot];
-        let space = JointSpace::from_chain(&rs.chain).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let space = &rs.space;
         let (birrt, rrt) = (birrt_for(&set.robot, &a), rrt_for(&set.robot, a.range, a.goal_zone));
         for problem in &set.problems {
             for rep in 0..a.repeat {
@@ -635,7 +637,6 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     }
                     Ok(sol) => {
                         put_stats(&mut row, &sol.stats);
-                        let fine_resolution = a.fine_resolution.min(a.resolution / 10.0);
                         let settings = ShortcutSettings {
                             attempts: a.shortcut_attempts,
                             time_limit: None,
@@ -674,7 +675,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             }
                             Ok(out) => {
                                 // Re-validate the whole timed motion at the fine resolution.
-                                let check = out.trajectory.check(&space, &mut v, fine_resolution);
+                                let check = out.trajectory.check(space, &mut v, fine_resolution);
                                 row["success"] = json!(check.is_ok());
                                 if let Err(e) = &check {
                                     row["error"] = json!(format!(
@@ -685,22 +686,22 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                 row["repaired_edges"] = json!(out.repaired);
                                 row["smoothing_fell_back"] = json!(out.fell_back);
                                 // (`--resolution` was checked to be positive and finite.)
-                                row["path_length"] = json!(out.trajectory.length(&space, a.resolution)?);
+                                row["path_length"] = json!(out.trajectory.length(space, a.resolution)?);
                                 row["duration_s"] = json!(out.trajectory.duration());
                                 if check.is_ok() && a.jerk != JerkKind::None {
                                     let t0 = Instant::now();
                                     let jerk = match a.jerk {
                                         JerkKind::Average => out.trajectory.with_jerk_limits(&rs.limits),
                                         JerkKind::Waypoints | JerkKind::None => {
-                                            out.trajectory.to_path(&space, WAYPOINT_SPACING).and_then(|waypoints| {
-                                                Trajectory::jerk_limited(&space, &waypoints, &rs.limits)
+                                            out.trajectory.to_path(space, WAYPOINT_SPACING).and_then(|waypoints| {
+                                                Trajectory::jerk_limited(space, &waypoints, &rs.limits)
                                             })
                                         }
                                     };
                                     row["jerk_time_s"] = json!(t0.elapsed().as_secs_f64());
                                     if let Ok(j) = jerk {
                                         row["jerk_duration_s"] = json!(j.duration());
-                                        row["jerk_valid"] = json!(j.check(&space, &mut v, fine_resolution).is_ok());
+                                        row["jerk_valid"] = json!(j.check(space, &mut v, fine_resolution).is_ok());
                                     } else {
                                         row["jerk_valid"] = json!(false);
                                     }
