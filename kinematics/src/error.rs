@@ -280,7 +280,9 @@ pub enum KinematicsError {
 pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;
 
 /// A number as error messages show it: as Rust prints it when that is short, in scientific
-/// notation when it is huge or tiny (a value of 10³⁰ would otherwise print 31 digits).
+/// notation when it is huge or tiny (a value of 10³⁰ would otherwise print 31 digits). It
+/// holds an `f64` or an `f32` (the precision parry's shapes use), each printed with its own
+/// shortest digits.
 ///
 /// ```
 /// use hearth_kinematics::Num;
@@ -288,17 +290,24 @@ pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;
 /// assert_eq!(Num(0.25).to_string(), "0.25");
 /// assert_eq!(Num(-2e-7).to_string(), "-2e-7");
 /// assert_eq!(Num(f64::NAN).to_string(), "NaN");
+/// assert_eq!(Num(1e30_f32).to_string(), "1e30");
+/// assert_eq!(Num(-0.1_f32).to_string(), "-0.1");
 /// ```
 #[derive(Clone, Copy, Debug)]
-pub struct Num(pub f64);
+pub struct Num<T = f64>(pub T);
 
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
+macro_rules! short_display {
+    ($($t:ty),*) => {$(
+        impl std::fmt::Display for Num<$t> {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                let a = self.0.abs();
+                if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
+                    write!(f, "{:e}", self.0)
+                } else {
+                    write!(f, "{}", self.0)
+                }
+            }
         }
-    }
+    )*};
 }
+short_display!(f64, f32);

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{PlanError, bad_state};
+use crate::error::{Num, PlanError, bad_state};
 use crate::motion::MotionValidator;
 use crate::space::Space;
 use crate::validity::StateValidator;
@@ -561,7 +561,8 @@ pub(crate) fn positive(value: f64) -> Option<f64> {
 
 /// `value` if it is positive and finite, else [`PlanError::BadInput`] naming the setting `what`.
 pub(crate) fn positive_finite(what: &str, value: f64) -> Result<f64, PlanError> {
-    positive(value).ok_or_else(|| PlanError::BadInput(format!("{what} is {value}; it must be positive and finite")))
+    positive(value)
+        .ok_or_else(|| PlanError::BadInput(format!("{what} is {}; it must be positive and finite", Num(value))))
 }
 
 /// The spacing that [`MotionValidator::new`](crate::motion::MotionValidator::new), which has

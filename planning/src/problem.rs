@@ -130,7 +130,7 @@ pub enum Defect {
     #[error("does not belong to a {0}")]
     NotForKind(&'static str),
     /// A lower limit above the upper one.
-    #[error("lower limit {lower} is above upper limit {upper}")]
+    #[error("lower limit {} is above upper limit {}", Num(*lower), Num(*upper))]
     InvertedLimits {
         /// Lower limit.
         lower: f64,

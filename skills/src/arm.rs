@@ -16,7 +16,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use hearth_kinematics::parry3d::shape::SharedShape;
-use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, Num, SelfCollisionMatrix, SelfCollisionSettings};
 use hearth_planning::goal::PoseGoal;
 use hearth_planning::motion::finest_resolution;
 use hearth_planning::obstacles::ParryScene;
@@ -1291,7 +1291,10 @@ impl Arm {
         }
         for (what, x) in [("distance", m.distance), ("speed", m.speed), ("step", m.step)] {
             if !x.is_finite() || x <= 0.0 {
-                return Err(SkillError::BadInput(format!("linear move {what} {x} must be positive")));
+                return Err(SkillError::BadInput(format!(
+                    "linear move {what} {} must be positive",
+                    Num(x)
+                )));
             }
         }
         if !m.force_limit.is_finite() || m.force_limit <= 0.0 {

@@ -18,7 +18,7 @@
 //! resists the robot and the skill reports [`SkillError::NoEffect`].
 
 use hearth_kinematics::parry3d::shape::SharedShape;
-use hearth_kinematics::{JointKind, to_pose};
+use hearth_kinematics::{JointKind, Num, to_pose};
 use hearth_sim::world::{GripperConfig, ModelHandle, World};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use rand::Rng;
@@ -157,7 +157,7 @@ pub fn close<R: Rng + ?Sized>(
 
 fn check_amount(amount: f64) -> SkillResult<()> {
     if !amount.is_finite() || amount <= 0.0 {
-        return Err(SkillError::BadInput(format!("amount {amount} must be positive")));
+        return Err(SkillError::BadInput(format!("amount {} must be positive", Num(amount))));
     }
     Ok(())
 }
@@ -254,7 +254,10 @@ pub fn move_joint<R: Rng + ?Sized>(
 ) -> SkillResult<ArticulatedReport> {
     check_settings(settings)?;
     if !delta.is_finite() {
-        return Err(SkillError::BadInput(format!("joint motion {delta} is not finite")));
+        return Err(SkillError::BadInput(format!(
+            "joint motion {} is not finite",
+            Num(delta)
+        )));
     }
     if let Some(h) = arm.held() {
         return Err(SkillError::BadInput(format!(
@@ -490,7 +493,7 @@ fn check_settings(s: &ArticulatedSettings) -> SkillResult<()> {
         ("max width", s.max_width),
     ] {
         if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("{what} {x} must be positive")));
+            return Err(SkillError::BadInput(format!("{what} {} must be positive", Num(x))));
         }
     }
     if !(0.0..=1.0).contains(&s.min_fraction) || s.min_fraction == 0.0 {

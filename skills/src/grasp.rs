@@ -17,7 +17,7 @@
 //! pinches the wall's upper part. Rim grasps are tried nearest the robot first, then around
 //! the rim.
 
-use hearth_kinematics::to_pose;
+use hearth_kinematics::{Num, to_pose};
 use hearth_sim::world::{BodyId, GripperConfig, ModelHandle, World, WorldError};
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rand::Rng;
@@ -673,7 +673,10 @@ fn check_settings(s: &GraspSettings) -> SkillResult<()> {
         ("speed", s.speed),
     ] {
         if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("grasp {what} {x} must be positive")));
+            return Err(SkillError::BadInput(format!(
+                "grasp {what} {} must be positive",
+                Num(x)
+            )));
         }
     }
     for (what, x) in [
@@ -683,7 +686,10 @@ fn check_settings(s: &GraspSettings) -> SkillResult<()> {
         ("pad half height", s.pad_half_height),
     ] {
         if !x.is_finite() || x < 0.0 {
-            return Err(SkillError::BadInput(format!("grasp {what} {x} must be non-negative")));
+            return Err(SkillError::BadInput(format!(
+                "grasp {what} {} must be non-negative",
+                Num(x)
+            )));
         }
     }
     if s.attempts == 0 {

@@ -9,7 +9,7 @@
 //! [`Surface`] posed in the world ([`PlaceTarget::from_surface`]),
 //! or any rectangle.
 
-use hearth_kinematics::to_pose;
+use hearth_kinematics::{Num, to_pose};
 use hearth_planning::Obstacles;
 use hearth_sim::assets::Surface;
 use hearth_sim::world::{ModelHandle, World};
@@ -428,7 +428,10 @@ fn check_settings(s: &PlaceSettings) -> SkillResult<()> {
         ("retreat", s.retreat),
     ] {
         if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("place {what} {x} must be positive")));
+            return Err(SkillError::BadInput(format!(
+                "place {what} {} must be positive",
+                Num(x)
+            )));
         }
     }
     if !s.clearance.is_finite() || s.clearance < 0.0 || !s.spacing.is_finite() || s.spacing < 0.0 || s.samples == 0 {

@@ -8,6 +8,7 @@
 //! `min_motion`. The defaults follow the paper's settings: a 0.30 m push limited to 60 N and a
 //! 0.10 m success threshold.
 
+use hearth_kinematics::Num;
 use hearth_kinematics::parry3d::shape::Ball;
 use hearth_planning::Obstacles;
 use hearth_sim::sensors::{Camera, Modality, ModalitySet};
@@ -319,12 +320,15 @@ fn check_settings(s: &PushSettings) -> SkillResult<()> {
         ("grip force", s.grip_force),
     ] {
         if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("push {what} {x} must be positive")));
+            return Err(SkillError::BadInput(format!("push {what} {} must be positive", Num(x))));
         }
     }
     for (what, x) in [("standoff", s.standoff), ("minimum motion", s.min_motion)] {
         if !x.is_finite() || x < 0.0 {
-            return Err(SkillError::BadInput(format!("push {what} {x} must be non-negative")));
+            return Err(SkillError::BadInput(format!(
+                "push {what} {} must be non-negative",
+                Num(x)
+            )));
         }
     }
     Ok(())

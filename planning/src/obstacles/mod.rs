@@ -37,6 +37,8 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Real, Rotation, Vector};
 use parry3d::shape::{Shape, SharedShape, TriMeshBuilderError};
 
+use crate::error::Num;
+
 pub use balls::BallBatch;
 pub use scene::ParryScene;
 
@@ -617,6 +619,9 @@ impl Obstacle {
 /// ```
 /// use hearth_planning::obstacles::ObstacleDefect;
 /// assert_eq!(ObstacleDefect::Pose.to_string(), "its pose is not finite");
+/// // Huge or tiny sizes print short, not as 31 digits.
+/// let far = ObstacleDefect::Extent { reach: 1e30 };
+/// assert!(far.to_string().starts_with("its bounding box reaches 1e30 m"));
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum ObstacleDefect {
@@ -624,13 +629,13 @@ pub enum ObstacleDefect {
     #[error("its pose is not finite")]
     Pose,
     /// The rotation is not a unit quaternion (it would scale the shape).
-    #[error("its rotation is not a unit quaternion (norm {norm})")]
+    #[error("its rotation is not a unit quaternion (norm {})", Num(*norm))]
     Rotation {
         /// The quaternion's norm.
         norm: Real,
     },
     /// A size of the shape is negative or not finite.
-    #[error("its {what} is {value}, not a finite size of 0 or more")]
+    #[error("its {what} is {}, not a finite size of 0 or more", Num(*value))]
     Size {
         /// Which size (`half-extent`, `radius`, `half-length`).
         what: &'static str,
@@ -644,7 +649,7 @@ pub enum ObstacleDefect {
     /// The shape reaches farther from the origin than
     /// [`MAX_EXTENT`](crate::problem::MAX_EXTENT) (1,000 km), where f32 queries lose their
     /// precision.
-    #[error("its bounding box reaches {reach} m from the origin, beyond the 1,000 km that queries can answer for")]
+    #[error("its bounding box reaches {} m from the origin, beyond the 1,000 km that queries can answer for", Num(*reach))]
     Extent {
         /// The largest coordinate of its bounding box, in metres.
         reach: Real,

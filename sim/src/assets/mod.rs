@@ -29,7 +29,7 @@ mod small;
 mod structure;
 pub(crate) mod writer;
 
-use hearth_kinematics::{KinematicsError, RobotModel};
+use hearth_kinematics::{KinematicsError, Num, RobotModel};
 use nalgebra::Vector3;
 
 pub use category::{Category, Placement, RoomType};
@@ -85,7 +85,7 @@ pub enum AssetError {
         count: usize,
     },
     /// The scale is not a finite number in (0.1, 10].
-    #[error("scale {scale} of {category} is not a finite number in (0.1, 10]")]
+    #[error("scale {} of {category} is not a finite number in (0.1, 10]", Num(*scale))]
     BadScale {
         /// The category.
         category: Category,

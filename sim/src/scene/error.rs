@@ -2,6 +2,8 @@
 
 use std::path::PathBuf;
 
+use hearth_kinematics::Num;
+
 use crate::assets::AssetError;
 
 /// What went wrong with a scene; every variant names the culprit.
@@ -103,7 +105,7 @@ pub enum SceneError {
         known: String,
     },
     /// An initial joint position is outside the joint's limits.
-    #[error("object `{object}`: joint `{joint}` = {value} is outside [{lower}, {upper}]")]
+    #[error("object `{object}`: joint `{joint}` = {} is outside [{}, {}]", Num(*value), Num(*lower), Num(*upper))]
     JointOutOfRange {
         /// The object.
         object: String,

@@ -1,5 +1,7 @@
 //! [`SensorError`]: what can go wrong when configuring or reading a sensor.
 
+use hearth_kinematics::Num;
+
 use crate::world::WorldError;
 
 /// An error from a camera, LiDAR or occupancy map. Every variant names the problem; a failed
@@ -25,7 +27,7 @@ pub enum SensorError {
         max: u32,
     },
     /// A numeric sensor parameter is out of range or not finite.
-    #[error("invalid sensor parameter `{name}` = {value}: {reason}")]
+    #[error("invalid sensor parameter `{name}` = {}: {reason}", Num(*value))]
     InvalidParameter {
         /// Parameter name.
         name: &'static str,

@@ -25,7 +25,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use hearth_kinematics::wrap_angle;
+use hearth_kinematics::{Num, wrap_angle};
 use hearth_sim::env::{DType, Space};
 
 use super::config::{ActionForm, ReLMoGenError, ReLMoGenResult};
@@ -197,6 +197,12 @@ impl ActionSpec {
     /// assert_eq!((u, v), (6, 2));
     /// assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     /// assert!(spec.decode(&[0.5]).is_err());
+    /// // A continuous entry out of range is named, its value printed short.
+    /// let spec = ActionSpec { form: ActionForm::Continuous, ..spec };
+    /// let mut action = vec![0.0_f32; spec.space().size()];
+    /// action[1] = 1e30;
+    /// let e = spec.decode(&action).unwrap_err();
+    /// assert!(e.to_string().contains("entry 1 = 1e30 is outside [-1, 1]"), "{e}");
     /// ```
     pub fn decode(&self, action: &[f32]) -> ReLMoGenResult<Subgoal> {
         let want = self.space().size();
@@ -212,7 +218,10 @@ impl ActionSpec {
         match self.form {
             ActionForm::Continuous => {
                 if let Some((k, x)) = action.iter().enumerate().find(|(_, x)| x.abs() > 1.0) {
-                    return Err(ReLMoGenError::BadAction(format!("entry {k} = {x} is outside [-1, 1]")));
+                    return Err(ReLMoGenError::BadAction(format!(
+                        "entry {k} = {} is outside [-1, 1]",
+                        Num(*x)
+                    )));
                 }
                 let a: [f64; CONTINUOUS_LEN] = std::array::from_fn(|k| f64::from(action[k]));
                 let unit = |x: f64| (x + 1.0) * 0.5;

@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use hearth_kinematics::Num;
 use hearth_sim::env::{CameraSection, EnvConfig, EnvError};
 use serde::{Deserialize, Serialize};
 
@@ -385,7 +386,10 @@ impl ReLMoGenConfig {
         ] {
             let ok = x.is_finite() && if strict { x > 0.0 } else { x >= 0.0 };
             if !ok {
-                return Err(bad(key, format!("{x} must be {}", if strict { "> 0" } else { "≥ 0" })));
+                return Err(bad(
+                    key,
+                    format!("{} must be {}", Num(x), if strict { "> 0" } else { "≥ 0" }),
+                ));
             }
         }
         Ok(())
