@@ -11,6 +11,9 @@ use hearth_kinematics::{
 };
 use nalgebra::Vector3;
 
+mod common;
+use common::{CUBE_F, CUBE_V, cube_obj};
+
 // ---------------------------------------------------------------------------------------------
 // Fixtures
 // ---------------------------------------------------------------------------------------------
@@ -24,34 +27,6 @@ fn fresh_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
-
-/// Corners of the cube [-0.5, 0.5]³.
-const CUBE_V: [[f32; 3]; 8] = [
-    [-0.5, -0.5, -0.5],
-    [0.5, -0.5, -0.5],
-    [0.5, 0.5, -0.5],
-    [-0.5, 0.5, -0.5],
-    [-0.5, -0.5, 0.5],
-    [0.5, -0.5, 0.5],
-    [0.5, 0.5, 0.5],
-    [-0.5, 0.5, 0.5],
-];
-
-/// Its 12 triangles, counter-clockwise seen from outside.
-const CUBE_F: [[usize; 3]; 12] = [
-    [0, 2, 1],
-    [0, 3, 2],
-    [4, 5, 6],
-    [4, 6, 7],
-    [0, 1, 5],
-    [0, 5, 4],
-    [1, 2, 6],
-    [1, 6, 5],
-    [2, 3, 7],
-    [2, 7, 6],
-    [3, 0, 4],
-    [3, 4, 7],
-];
 
 fn normal(f: &[usize; 3]) -> [f32; 3] {
     let [a, b, c] = f.map(|i| Vector3::from(CUBE_V[i]));
@@ -89,17 +64,6 @@ fn binary_stl() -> Vec<u8> {
         b.extend_from_slice(&0u16.to_le_bytes());
     }
     b
-}
-
-fn obj() -> String {
-    let mut s = String::from("# cube\no cube\n");
-    for v in &CUBE_V {
-        s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
-    }
-    for f in &CUBE_F {
-        s += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
-    }
-    s
 }
 
 fn collada() -> String {
@@ -159,7 +123,7 @@ fn write_cubes(dir: &Path) {
     std::fs::create_dir_all(dir).unwrap();
     std::fs::write(dir.join("cube.stl"), ascii_stl()).unwrap();
     std::fs::write(dir.join("cube_bin.stl"), binary_stl()).unwrap();
-    std::fs::write(dir.join("cube.obj"), obj()).unwrap();
+    std::fs::write(dir.join("cube.obj"), cube_obj()).unwrap();
     std::fs::write(dir.join("cube.dae"), collada()).unwrap();
 }
 

@@ -10,6 +10,8 @@ use hearth_kinematics::{JointKind, LoadOptions, MeshCollision, RobotModel};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 
+mod common;
+
 /// A valid robot using every supported joint kind, a mimic (and a mimic of a mimic), every
 /// primitive geometry, inertials, dynamics, materials and a branch.
 const BASE: &str = r#"<?xml version="1.0"?>
@@ -393,35 +395,25 @@ fn base_with_meshes() -> String {
     BASE.replacen(
         r#"<collision><origin xyz="0 0 0.4"/><geometry><sphere radius="0.05"/></geometry></collision>"#,
         r#"<collision><origin xyz="0 0 0.4"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0 0 0.3"/><geometry><mesh filename="cube.obj" scale="0.05 0.05 0.05"/></geometry></collision>"#,
+    <collision><origin xyz="0 0 0.3"/><geometry><mesh filename="cube.obj" scale="0.1 0.1 0.1"/></geometry></collision>"#,
         1,
     )
     .replacen(
         r#"<link name="wrist">
     <collision><geometry><sphere radius="0.04"/></geometry></collision>"#,
         r#"<link name="wrist">
-    <collision><geometry><mesh filename="cube.obj" scale="0.04 0.04 0.04"/></geometry></collision>"#,
+    <collision><geometry><mesh filename="cube.obj" scale="0.08 0.08 0.08"/></geometry></collision>"#,
         1,
     )
 }
 
-/// A folder (made once per process) holding `cube.obj`, the cube [-1, 1]³.
+/// A folder (made once per process) holding `cube.obj`, the cube [-0.5, 0.5]³.
 fn mesh_dir() -> &'static PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!("hearth_urdf_fuzz_{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let mut obj = String::new();
-        for i in 0..8 {
-            let c = |bit: i32| if i & bit == 0 { -1 } else { 1 };
-            obj += &format!("v {} {} {}\n", c(1), c(2), c(4));
-        }
-        for f in [
-            "1 3 2", "2 3 4", "5 6 7", "6 8 7", "1 2 5", "2 6 5", "3 7 4", "4 7 8", "1 5 3", "3 5 7", "2 4 6", "4 8 6",
-        ] {
-            obj += &format!("f {f}\n");
-        }
-        std::fs::write(dir.join("cube.obj"), obj).unwrap();
+        std::fs::write(dir.join("cube.obj"), common::cube_obj()).unwrap();
         dir
     })
 }

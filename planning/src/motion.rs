@@ -2,8 +2,7 @@
 
 use std::collections::VecDeque;
 
-use crate::error::Num;
-use crate::error::PlanError;
+use crate::error::{Num, PlanError};
 use crate::planner::{diameter, positive_finite, resolution_or_default};
 use crate::space::Space;
 use crate::validity::StateValidator;
