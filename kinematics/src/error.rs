@@ -280,7 +280,8 @@ pub enum KinematicsError {
 pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;
 
 /// A number as error messages show it: as Rust prints it when that is short, in scientific
-/// notation when it is huge or tiny (a value of 10³⁰ would otherwise print 31 digits). It
+/// notation when it is huge or tiny (a value of 10³⁰ would otherwise print 31 digits); with a
+/// precision (`{:.2}`), that many decimals, and scientific notation only when huge. It
 /// holds an `f64` or an `f32` (the precision parry's shapes use), each printed with its own
 /// shortest digits.
 ///
@@ -292,6 +293,10 @@ pub type Result<T, E = KinematicsError> = std::result::Result<T, E>;
 /// assert_eq!(Num(f64::NAN).to_string(), "NaN");
 /// assert_eq!(Num(1e30_f32).to_string(), "1e30");
 /// assert_eq!(Num(-0.1_f32).to_string(), "-0.1");
+/// // A precision keeps that many decimals, and scientific notation for huge values:
+/// assert_eq!(format!("{:.2}", Num(3.14159)), "3.14");
+/// assert_eq!(format!("{:.2}", Num(-1e30)), "-1.00e30");
+/// assert_eq!(format!("{:.2}", Num(1e-9)), "0.00");
 /// ```
 #[derive(Clone, Copy, Debug)]
 pub struct Num<T = f64>(pub T);
@@ -301,10 +306,13 @@ macro_rules! short_display {
         impl std::fmt::Display for Num<$t> {
             fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
                 let a = self.0.abs();
-                if a.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
-                    write!(f, "{:e}", self.0)
-                } else {
-                    write!(f, "{}", self.0)
+                let huge = a.is_finite() && a >= 1e7;
+                match f.precision() {
+                    // A fixed number of decimals rounds tiny values to zero, as asked.
+                    Some(p) if huge => write!(f, "{:.p$e}", self.0),
+                    Some(p) => write!(f, "{:.p$}", self.0),
+                    None if huge || (a != 0.0 && a < 1e-4) => write!(f, "{:e}", self.0),
+                    None => write!(f, "{}", self.0),
                 }
             }
         }

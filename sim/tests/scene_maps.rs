@@ -68,6 +68,9 @@ fn path_queries_fail_with_typed_errors() {
         m.shortest_path([-100.0, 0.0], c),
         Err(SceneError::OffMap { what: "start", .. })
     ));
+    // A point far off prints short.
+    let far = m.shortest_path([1e30, -2.5], c).unwrap_err().to_string();
+    assert_eq!(far, "start (1.00e30, -2.50) is outside the map");
     assert!(matches!(
         m.shortest_path(c, [f64::NAN, 0.0]),
         Err(SceneError::NonFinite { .. })

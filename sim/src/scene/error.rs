@@ -127,7 +127,7 @@ pub enum SceneError {
         support: String,
     },
     /// A point given to a map query lies outside the map.
-    #[error("{what} ({x:.2}, {y:.2}) is outside the map")]
+    #[error("{what} ({:.2}, {:.2}) is outside the map", Num(*x), Num(*y))]
     OffMap {
         /// `start` or `goal`.
         what: &'static str,
