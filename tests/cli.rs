@@ -570,8 +570,8 @@ fn bench_plan_writes_results_json() {
     // The Panda's BiRRT takes the planner's connection unless told otherwise; a solved plan
     // reports its trees' sizes.
     for (connect, says) in [
-        (&[][..], "BiRRT step 0.65 rad, other connection"),
-        (&["--connect", "onward"][..], "BiRRT step 0.65 rad, onward connection"),
+        (&[][..], "BiRRT step 0.5 rad, other connection"),
+        (&["--connect", "onward"][..], "BiRRT step 0.5 rad, onward connection"),
     ] {
         let (err, v) = bench_json(&[&["--only", "table_pick:1"][..], connect].concat(), "connect.json");
         assert!(err.contains(says), "{connect:?}: {err}");
@@ -581,6 +581,40 @@ fn bench_plan_writes_results_json() {
             "{r}"
         );
     }
+    // BiRRT plans with the joints' reach as distance weights (said on the setup line, the
+    // last wrist joint lightest) unless told otherwise, with the step that goes with them;
+    // path lengths are reported unweighted either way: no shorter than the straight line
+    // from start to goal in radians, which the weighted metric would shorten.
+    let problem: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(data).unwrap()).unwrap();
+    let p1 = problem["problems"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["id"] == 1)
+        .unwrap();
+    let straight = p1["start"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(p1["goals"][0].as_array().unwrap())
+        .map(|(a, b)| (a.as_f64().unwrap() - b.as_f64().unwrap()).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    for (weights, says) in [
+        (
+            &[][..],
+            "distance weights 1.00, 1.00, 0.72, 0.65, 0.30, 0.30, 0.23 (the joints' reach); BiRRT step 0.5 rad",
+        ),
+        (&["--weights", "reach"][..], "(the joints' reach); BiRRT step 0.5 rad"),
+        (&["--weights", "none"][..], "joints.json; BiRRT step 0.65 rad"),
+    ] {
+        let (err, v) = bench_json(&[&["--only", "table_pick:1"][..], weights].concat(), "weights.json");
+        assert!(err.contains(says), "{weights:?}: {err}");
+        let length = v["results"][0]["path_length"].as_f64().unwrap();
+        assert!(length >= straight - 1e-9, "{weights:?}: length {length} < {straight}");
+    }
+    let err = fails(&["bench", "plan", "--problems", data, "--weights", "heavy"]);
+    assert!(err.contains("--weights"), "{err}");
     // An iteration limit ends a plan that the time limit would not: the same plan on any
     // machine, stopped at the same iteration (or solved within it).
     let (_, v) = bench_json(

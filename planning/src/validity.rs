@@ -843,6 +843,44 @@ impl RobotValidity {
         &self.chain
     }
 
+    /// Distance weights per chain joint for [`JointSpace::with_weights`](crate::space::JointSpace::with_weights),
+    /// from how far a joint's motion can carry the robot's checked geometry: a revolute
+    /// joint's bound on the distance of any point below it from the joint (metres moved per
+    /// radian), a prismatic joint's 1 (metre per metre), each divided by the largest of them.
+    ///
+    /// In a space with these weights, a step of a given length moves no point of the robot
+    /// further than an unweighted step of that length along the heaviest joint can (the bound
+    /// `Σⱼ Rⱼ·|Δⱼ|` of [`RobotValidity`]'s free regions is the same for both), but a wrist
+    /// turns further than a shoulder. A tree then steps about equally far in the workspace
+    /// whichever joints it moves, and a planner's edges are checked about equally densely in
+    /// the workspace. Joints that move nothing checked weigh 0.
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::ParryScene;
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::RobotValidity;
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    ///
+    /// // `panda`: the Panda model; `arm`: its arm chain; `acm`: its self-collision matrix.
+    /// let v = RobotValidity::new(arm.clone(), acm, Arc::new(ParryScene::new(vec![])));
+    /// let w = v.joint_weights();
+    /// assert_eq!(w.iter().cloned().fold(0.0, f64::max), 1.0);
+    /// assert!(w[6] < 0.5 * w[0]); // the last wrist joint carries only the hand
+    /// let space = JointSpace::from_chain(&arm)?.with_weights(&w)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn joint_weights(&self) -> Vec<f64> {
+        let w = &self.reach.weights;
+        let top = w.iter().cloned().filter(|x| x.is_finite()).fold(0.0f64, f64::max);
+        w.iter()
+            .map(|&x| if top > 0.0 && x.is_finite() { x / top } else { 1.0 })
+            .collect()
+    }
+
     /// Sets the full configuration that joints outside the chain keep (fingers, head, …).
     ///
     /// ```

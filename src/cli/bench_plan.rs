@@ -37,6 +37,16 @@ pub enum PlannerKind {
     Lazyprm,
 }
 
+/// `--weights`: the planning space's distance weights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WeightsArg {
+    /// Every joint weighs 1: radians (and metres) as they are, the metric of OMPL and VAMP.
+    None,
+    /// Each joint weighs how far it can carry the robot's geometry, the largest 1
+    /// (`RobotValidity::joint_weights`).
+    Reach,
+}
+
 /// `--connect`: which tree BiRRT grows along the joining line ([`Connect`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ConnectArg {
@@ -105,13 +115,25 @@ pub struct BenchPlanArgs {
     /// 1.2e-5 rad for the Panda's arm), so that no edge takes more than 2²⁰ checks.
     #[arg(long, default_value_t = 0.002)]
     fine_resolution: f64,
-    /// Longest planner step (rad). When absent: BiRRT takes 1.2 rad for the Fetch, 0.65 rad
-    /// for the Panda and its own default otherwise (0.02 × the space's extent); RRT takes 6 rad
+    /// Longest planner step (rad, in the planning space's metric: see `--weights`). When
+    /// absent: BiRRT takes 0.4 rad for the Fetch and 0.5 rad for the Panda with the joints'
+    /// reach as weights (1.2 and 0.65 rad without), and its own default otherwise (0.02 × the
+    /// space's extent); RRT takes 6 rad
     /// for the Panda and the Fetch and its default otherwise; LazyPRM 4 rad for the Fetch and
     /// its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No
     /// shorter than the finest resolution (`--fine-resolution`).
     #[arg(long)]
     range: Option<f64>,
+    /// The planning space's distance weights, its metric for nearest neighbours, steps and
+    /// the spacing of edge checks: `none` or `reach` (`RobotValidity::joint_weights`: a wrist
+    /// weighs less than a shoulder, so a step moves the robot about equally far whichever
+    /// joints it turns). `--range` and the planner's edge checks at `--resolution` are in
+    /// that metric; smoothing, the re-check at `--fine-resolution` and the reported path
+    /// lengths are not weighted. When absent: `reach` for BiRRT,
+    /// which solved more of the Fetch's hardest problems with it, `none` for RRT and LazyPRM,
+    /// whose steps were tuned without weights. See `docs/planning-log.md`.
+    #[arg(long, value_enum)]
+    weights: Option<WeightsArg>,
     /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
     /// minimum radius is a quarter of it). Off by default: see `docs/planning-log.md`.
     #[arg(long)]
@@ -210,15 +232,18 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
 
 /// BiRRT for a robot as the command's arguments set it up. `--range` and `--connect` where
 /// given, else this benchmark's settings, measured on MotionBenchMaker (`docs/planning-log.md`):
-/// the Fetch's torso + arm problems are solved more often with a 1.2 rad step than with the
-/// planner's 0.26 rad default (94.0 % against 82.8 % in 1 s); the Panda's are solved fastest
-/// with 0.65 rad. Both take the planner's connection, [`Connect::Other`]: with
+/// without weights, the Fetch's torso + arm problems are solved more often with a 1.2 rad step
+/// than with the planner's 0.26 rad default (94.0 % against 82.8 % in 1 s) and the Panda's
+/// fastest with 0.65 rad; with the joints' reach as weights (the default), 0.4 and 0.5 rad
+/// (fiftieth round). Both take the planner's connection, [`Connect::Other`]: with
 /// [`Connect::Onward`] the Fetch's hardest problems were solved in 54 of 176 plans against 74,
 /// and the Panda's open ones were slower. Other robots take the planner's defaults.
 fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
-    let default_range = match robot {
-        "fetch" => Some(1.2),
-        "panda" => Some(0.65),
+    let default_range = match (robot, weighted(a)) {
+        ("fetch", false) => Some(1.2),
+        ("fetch", true) => Some(0.4),
+        ("panda", false) => Some(0.65),
+        ("panda", true) => Some(0.5),
         _ => None,
     };
     BiRrt {
@@ -232,6 +257,13 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
         escape: escape_for(a),
         ..BiRrt::default()
     }
+}
+
+/// Whether the planning space takes [`RobotValidity::joint_weights`] (`--weights`; by default
+/// for BiRRT only).
+fn weighted(a: &BenchPlanArgs) -> bool {
+    a.weights
+        .map_or(a.planner == PlannerKind::Birrt, |w| w == WeightsArg::Reach)
 }
 
 /// The pocket escape the arguments ask for (BiRRT's and LazyPRM's): `None` with `--no-escape`.
@@ -312,14 +344,26 @@ fn selected(selectors: &[(String, Option<u32>)], family: &str, id: u32) -> bool 
 
 struct RobotSetup {
     chain: Chain,
+    /// The planning space (weighted or not, see [`weighted`]).
     space: JointSpace,
+    /// The same space without weights: smoothing, the re-check and the reported path lengths
+    /// run in it (radians, and metres for prismatic joints) whatever the planner's metric.
+    plain: JointSpace,
     limits: Limits,
     matrix: SelfCollisionMatrix,
     reference: Vec<f64>,
     note: String,
 }
 
-fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> anyhow::Result<RobotSetup> {
+/// The robot's chain, self-collision matrix, reference and limits as the problem set describes
+/// them, and its planning space: with [`RobotValidity::joint_weights`] as distance weights when
+/// `weighted`.
+fn setup(
+    robot: &str,
+    joint_names: &[String],
+    joints_file: Option<&Path>,
+    weighted: bool,
+) -> anyhow::Result<RobotSetup> {
     let model = RobotModel::builtin(robot)?;
     let chain = Chain::new(&model, joint_names)?;
     let mut matrix = SelfCollisionMatrix::compute(
@@ -368,9 +412,24 @@ fn setup(robot: &str, joint_names: &[String], joints_file: Option<&Path>) -> any
             info.notes.self_collision_allowed_pairs.len()
         ));
     }
+    let plain = JointSpace::from_chain(&chain).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let space = if weighted {
+        let v = RobotValidity::new(chain.clone(), matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
+        let w = v.joint_weights();
+        let shown: Vec<String> = w.iter().map(|x| format!("{x:.2}")).collect();
+        let sep = if note.is_empty() { "" } else { "; " };
+        note.push_str(&format!(
+            "{sep}distance weights {} (the joints' reach)",
+            shown.join(", ")
+        ));
+        plain.clone().with_weights(&w).map_err(|e| anyhow::anyhow!("{e}"))?
+    } else {
+        plain.clone()
+    };
     Ok(RobotSetup {
         limits: Limits::for_chain(&chain),
-        space: JointSpace::from_chain(&chain).map_err(|e| anyhow::anyhow!("{e}"))?,
+        space,
+        plain,
         chain,
         matrix,
         reference,
@@ -492,9 +551,11 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     let progress = Progress::new(total);
     for (set, joints) in &sets {
         if !setups.contains_key(&set.robot) {
-            let s = setup(&set.robot, &set.joint_names, joints.as_deref())
+            let s = setup(&set.robot, &set.joint_names, joints.as_deref(), weighted(&a))
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
-            let finest = finest_resolution(&s.space);
+            // The unweighted space's finest spacing is the coarser of the two (weights are at
+            // most 1): the re-check runs in it, the planner in the weighted one.
+            let finest = finest_resolution(&s.plain);
             let too_fine = if a.resolution < finest {
                 Some(format!("--resolution {:e}", a.resolution))
             } else if let Some(r) = a.range.filter(|&r| r < finest) {
@@ -653,9 +714,13 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         };
                         let left = (a.time_limit - sol.stats.time.as_secs_f64()).max(0.05);
                         let t0 = Instant::now();
+                        // Smoothing, repairs and the re-check run unweighted, whatever the
+                        // planner's metric: every state of the motion at most
+                        // `fine_resolution` rad from the next, whichever joints move.
+                        let mut unweighted = MotionValidator::new(rs.plain.clone(), a.resolution);
                         let smoothed = smooth(
                             smoothing,
-                            &mut motion,
+                            &mut unweighted,
                             &mut v,
                             &sol.path,
                             &rs.limits,
@@ -675,7 +740,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                             }
                             Ok(out) => {
                                 // Re-validate the whole timed motion at the fine resolution.
-                                let check = out.trajectory.check(space, &mut v, fine_resolution);
+                                let check = out.trajectory.check(&rs.plain, &mut v, fine_resolution);
                                 row["success"] = json!(check.is_ok());
                                 if let Err(e) = &check {
                                     row["error"] = json!(format!(
@@ -686,22 +751,23 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                                 row["repaired_edges"] = json!(out.repaired);
                                 row["smoothing_fell_back"] = json!(out.fell_back);
                                 // (`--resolution` was checked to be positive and finite.)
-                                row["path_length"] = json!(out.trajectory.length(space, a.resolution)?);
+                                row["path_length"] = json!(out.trajectory.length(&rs.plain, a.resolution)?);
                                 row["duration_s"] = json!(out.trajectory.duration());
                                 if check.is_ok() && a.jerk != JerkKind::None {
                                     let t0 = Instant::now();
                                     let jerk = match a.jerk {
                                         JerkKind::Average => out.trajectory.with_jerk_limits(&rs.limits),
-                                        JerkKind::Waypoints | JerkKind::None => {
-                                            out.trajectory.to_path(space, WAYPOINT_SPACING).and_then(|waypoints| {
-                                                Trajectory::jerk_limited(space, &waypoints, &rs.limits)
-                                            })
-                                        }
+                                        JerkKind::Waypoints | JerkKind::None => out
+                                            .trajectory
+                                            .to_path(&rs.plain, WAYPOINT_SPACING)
+                                            .and_then(|waypoints| {
+                                                Trajectory::jerk_limited(&rs.plain, &waypoints, &rs.limits)
+                                            }),
                                     };
                                     row["jerk_time_s"] = json!(t0.elapsed().as_secs_f64());
                                     if let Ok(j) = jerk {
                                         row["jerk_duration_s"] = json!(j.duration());
-                                        row["jerk_valid"] = json!(j.check(space, &mut v, fine_resolution).is_ok());
+                                        row["jerk_valid"] = json!(j.check(&rs.plain, &mut v, fine_resolution).is_ok());
                                     } else {
                                         row["jerk_valid"] = json!(false);
                                     }
