@@ -479,7 +479,8 @@ fn bench_plan_writes_results_json() {
     // LazyPRM takes the benchmark's step and greedy growth for the Fetch, its own defaults for
     // the Panda; `--tree-connect` sets the greedy growth for both. A robot's setup line ends
     // with its planner step. The Panda's first table_pick problem wedges a query end, so its
-    // plan shows whether the growth was greedy.
+    // plan shows whether the growth was greedy (in the unweighted joint space: with the
+    // joints' reach as weights, the default, no query end of it is wedged).
     let lazy = |tree_connect: Option<&str>, name: &str| {
         let mut args = vec![
             "--problems",
@@ -489,6 +490,8 @@ fn bench_plan_writes_results_json() {
             "--warm-up",
             "0",
             "--shortcut",
+            "none",
+            "--weights",
             "none",
         ];
         if let Some(value) = tree_connect {
@@ -534,6 +537,25 @@ fn bench_plan_writes_results_json() {
     assert!(
         chosen == off && on != off,
         "Panda checks: chosen {chosen}, off {off}, on {on}"
+    );
+    // With the weights (the default), the Fetch's LazyPRM takes the step that goes with them.
+    let (err, _) = bench_json(
+        &[
+            "--problems",
+            fetch,
+            "--planner",
+            "lazyprm",
+            "--warm-up",
+            "0",
+            "--shortcut",
+            "none",
+        ],
+        "lazy_weighted.json",
+    );
+    assert!(
+        setup_ends(&err, "fetch", "LazyPRM step 2 rad, wedged ends grown greedily")
+            && err.contains("(the joints' reach)"),
+        "{err}"
     );
     // Two racing copies per plan: said on the setup line; the same seed plans the same paths.
     let raced = |name: &str| {

@@ -119,8 +119,8 @@ pub struct BenchPlanArgs {
     /// absent: BiRRT takes 0.4 rad for the Fetch and 0.5 rad for the Panda with the joints'
     /// reach as weights (1.2 and 0.65 rad without), and its own default otherwise (0.02 × the
     /// space's extent); RRT takes 6 rad
-    /// for the Panda and the Fetch and its default otherwise; LazyPRM 4 rad for the Fetch and
-    /// its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No
+    /// for the Panda and the Fetch and its default otherwise; LazyPRM 2 rad for the Fetch with
+    /// the weights (4 rad without) and its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No
     /// shorter than the finest resolution (`--fine-resolution`).
     #[arg(long)]
     range: Option<f64>,
@@ -129,9 +129,8 @@ pub struct BenchPlanArgs {
     /// weighs less than a shoulder, so a step moves the robot about equally far whichever
     /// joints it turns). `--range` and the planner's edge checks at `--resolution` are in
     /// that metric; smoothing, the re-check at `--fine-resolution` and the reported path
-    /// lengths are not weighted. When absent: `reach` for BiRRT,
-    /// which solved more of the Fetch's hardest problems with it, `none` for RRT and LazyPRM,
-    /// whose steps were tuned without weights. See `docs/planning-log.md`.
+    /// lengths are not weighted. When absent: `reach`, with which every planner solved more
+    /// of the Fetch's problems, and faster. See `docs/planning-log.md`.
     #[arg(long, value_enum)]
     weights: Option<WeightsArg>,
     /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
@@ -260,10 +259,9 @@ fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
 }
 
 /// Whether the planning space takes [`RobotValidity::joint_weights`] (`--weights`; by default
-/// for BiRRT only).
+/// it does).
 fn weighted(a: &BenchPlanArgs) -> bool {
-    a.weights
-        .map_or(a.planner == PlannerKind::Birrt, |w| w == WeightsArg::Reach)
+    a.weights != Some(WeightsArg::None)
 }
 
 /// The pocket escape the arguments ask for (BiRRT's and LazyPRM's): `None` with `--no-escape`.
@@ -313,11 +311,13 @@ fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
 /// measured on MotionBenchMaker (`docs/planning-log.md`, seventeenth round): the Fetch's
 /// torso and arm problems are solved more often with 4 rad than with the planner's default of
 /// 0.2 × the extent (848 against 807 of 1,068 plans over seeds 0 and 1; bookshelf_small,
-/// bookshelf_tall and cage gain, bookshelf_thin loses 3 %). Other robots, the Panda included,
-/// take the default.
-fn lazyprm_range(robot: &str, range: Option<f64>) -> Option<f64> {
-    range.or(match robot {
-        "fetch" => Some(4.0),
+/// bookshelf_tall and cage gain, bookshelf_thin loses 3 %); with the joints' reach as weights
+/// (the default since the fiftieth round), 2 rad. Other robots, the Panda included, take the
+/// default.
+fn lazyprm_range(robot: &str, a: &BenchPlanArgs) -> Option<f64> {
+    a.range.or(match (robot, weighted(a)) {
+        ("fetch", false) => Some(4.0),
+        ("fetch", true) => Some(2.0),
         _ => None,
     })
 }
@@ -592,7 +592,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     )
                 }
                 PlannerKind::Lazyprm => {
-                    let range = step_text(lazyprm_range(&set.robot, a.range));
+                    let range = step_text(lazyprm_range(&set.robot, &a));
                     let greedy = if lazyprm_connect(&set.robot, a.tree_connect) {
                         ", wedged ends grown greedily"
                     } else {
@@ -670,7 +670,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     }
                     PlannerKind::Lazyprm => Race::new(
                         LazyPrm::new(LazyPrmSettings {
-                            range: lazyprm_range(&set.robot, a.range),
+                            range: lazyprm_range(&set.robot, &a),
                             tree_connect: lazyprm_connect(&set.robot, a.tree_connect),
                             escape: escape_for(&a),
                             ..LazyPrmSettings::default()
