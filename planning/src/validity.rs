@@ -319,6 +319,10 @@ fn rest_subsets(model: &RobotModel, geometric: &[usize], moving: &FkSubset, move
         .collect()
 }
 
+/// The lightest weight [`RobotValidity::joint_weights`] gives a joint (one that moves nothing
+/// checked).
+const MIN_JOINT_WEIGHT: f64 = 1e-3;
+
 /// The exact checker: forward kinematics of the whole robot, every link with geometry against
 /// the obstacles, the self-collision matrix's pairs against each other, and attached objects
 /// against both. Buffers are allocated once; checking does not allocate.
@@ -853,7 +857,9 @@ impl RobotValidity {
     /// `Σⱼ Rⱼ·|Δⱼ|` of [`RobotValidity`]'s free regions is the same for both), but a wrist
     /// turns further than a shoulder. A tree then steps about equally far in the workspace
     /// whichever joints it moves, and a planner's edges are checked about equally densely in
-    /// the workspace. Joints that move nothing checked weigh 0.
+    /// the workspace. A joint that moves nothing checked weighs the least allowed, 0.001, so
+    /// that every joint still counts in the distance (a goal differs from a state short of it);
+    /// a chain that moves nothing checked gets weights of 1.
     ///
     /// ```
     /// use hearth_planning::obstacles::ParryScene;
@@ -877,7 +883,10 @@ impl RobotValidity {
         let w = &self.reach.weights;
         let top = w.iter().cloned().filter(|x| x.is_finite()).fold(0.0f64, f64::max);
         w.iter()
-            .map(|&x| if top > 0.0 && x.is_finite() { x / top } else { 1.0 })
+            .map(|&x| match (top > 0.0, x.is_finite()) {
+                (true, true) => (x / top).max(MIN_JOINT_WEIGHT),
+                _ => 1.0,
+            })
             .collect()
     }
 

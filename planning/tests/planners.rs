@@ -613,6 +613,57 @@ fn panda_table_lazy_prm() {
     );
 }
 
+/// The three planners in the joint space weighted by the joints' reach
+/// ([`RobotValidity::joint_weights`], as the benchmark plans): solved, valid and reproducible.
+#[test]
+fn panda_table_planners_with_reach_weights() {
+    let (space, mut v) = table_world();
+    let w = v.joint_weights();
+    assert_eq!(w.iter().cloned().fold(0.0, f64::max), 1.0, "{w:?}");
+    assert!(w.iter().all(|&x| x > 0.0 && x <= 1.0), "{w:?}");
+    assert!(
+        w[6] < w[3] && w[3] < w[1],
+        "the hand's joint lightest, the shoulder's heaviest: {w:?}"
+    );
+    let weighted = space.clone().with_weights(&w).unwrap();
+    let request = table_request();
+    // A radian of the hand's joint is a short way in the weighted space, one of the shoulder's
+    // as long as before.
+    let (mut wrist, mut shoulder) = (request.start.clone(), request.start.clone());
+    wrist[6] += 1.0;
+    shoulder[0] += 1.0;
+    assert!((weighted.distance(&request.start, &wrist) - w[6]).abs() < 1e-12);
+    assert!((weighted.distance(&request.start, &shoulder) - space.distance(&request.start, &shoulder)).abs() < 1e-12);
+    let budget = budget(50_000);
+    solve(
+        "table/birrt/weighted",
+        BiRrt::default,
+        &weighted,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget,
+    );
+    solve(
+        "table/rrt/weighted",
+        Rrt::default,
+        &weighted,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget,
+    );
+    solve(
+        "table/lazy_prm/weighted",
+        LazyPrm::default,
+        &weighted,
+        PANDA_RESOLUTION,
+        &mut v,
+        &request,
+        &budget,
+    );
+}
+
 /// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
 #[test]
 fn panda_table_birrt_race() {
