@@ -106,7 +106,9 @@ pub struct BenchPlanArgs {
     #[arg(long)]
     iterations: Option<u64>,
     /// Edge-check resolution while planning (joint-space distance between checked states,
-    /// rad). The default, 1/32 rad, is VAMP's, so both check edges equally densely.
+    /// rad, in the planning space's metric: see `--weights`). The default, 1/32 rad, is
+    /// VAMP's: unweighted, both check edges equally densely; weighted, a joint of weight `w`
+    /// is checked every 1/(32·w) rad, no further apart in the workspace.
     #[arg(long, default_value_t = 1.0 / 32.0)]
     resolution: f64,
     /// Resolution of the repair and the final re-check of every path (rad): at most a tenth of
@@ -117,11 +119,11 @@ pub struct BenchPlanArgs {
     fine_resolution: f64,
     /// Longest planner step (rad, in the planning space's metric: see `--weights`). When
     /// absent: BiRRT takes 0.4 rad for the Fetch and 0.5 rad for the Panda with the joints'
-    /// reach as weights (1.2 and 0.65 rad without), and its own default otherwise (0.02 × the
-    /// space's extent); RRT takes 6 rad
-    /// for the Panda and the Fetch and its default otherwise; LazyPRM 2 rad for the Fetch with
-    /// the weights (4 rad without) and its default otherwise (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No
-    /// shorter than the finest resolution (`--fine-resolution`).
+    /// reach as weights (1.2 and 0.65 rad without) and its own default otherwise (0.02 × the
+    /// space's extent); RRT takes 6 rad for the Panda and the Fetch and its default otherwise;
+    /// LazyPRM 2 rad for the Fetch with the weights (4 rad without) and its default otherwise
+    /// (0.2 × the extent, as OMPL). See `docs/planning-log.md`. No shorter than the finest
+    /// resolution (`--fine-resolution`).
     #[arg(long)]
     range: Option<f64>,
     /// The planning space's distance weights, its metric for nearest neighbours, steps and
