@@ -848,16 +848,16 @@ impl RobotValidity {
     }
 
     /// Distance weights per chain joint for [`JointSpace::with_weights`](crate::space::JointSpace::with_weights),
-    /// from how far a joint's motion can carry the robot's checked geometry: a revolute
-    /// joint's bound on the distance of any point below it from the joint (metres moved per
-    /// radian), a prismatic joint's 1 (metre per metre), each divided by the largest of them.
+    /// from how far a joint's motion can carry the robot's own checked geometry (held objects
+    /// do not change them): a revolute joint's bound on the distance of any point below it
+    /// from the joint (metres moved per radian), a prismatic joint's 1 (metre per metre), each
+    /// divided by the largest of them.
     ///
-    /// In a space with these weights, a step of a given length moves no point of the robot
-    /// further than an unweighted step of that length along the heaviest joint can (the bound
-    /// `Σⱼ Rⱼ·|Δⱼ|` of [`RobotValidity`]'s free regions is the same for both), but a wrist
-    /// turns further than a shoulder. A tree then steps about equally far in the workspace
-    /// whichever joints it moves, and a planner's edges are checked about equally densely in
-    /// the workspace. A joint that moves nothing checked weighs the least allowed, 0.001, so
+    /// With these weights, the bound on how far a step of a given length can move any point
+    /// of the robot (`Σⱼ Rⱼ·|Δⱼ| ≤ max R · √n · length`, as for [`RobotValidity`]'s free
+    /// regions) is the same as without them, but for it a wrist turns further than a
+    /// shoulder. A tree then steps about equally far in the workspace whichever joints it
+    /// moves, and a planner's edges are checked about equally densely in the workspace. A joint that moves nothing checked weighs the least allowed, 0.001, so
     /// that every joint still counts in the distance (a goal differs from a state short of it);
     /// a chain that moves nothing checked gets weights of 1.
     ///
