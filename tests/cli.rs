@@ -481,7 +481,7 @@ fn bench_plan_writes_results_json() {
     // with its planner step. The Panda's first table_pick problem wedges a query end, so its
     // plan shows whether the growth was greedy (in the unweighted joint space: with the
     // joints' reach as weights, the default, no query end of it is wedged).
-    let lazy = |tree_connect: Option<&str>, name: &str| {
+    let lazy = |tree_connect: Option<&str>, weights: &'static str, name: &str| {
         let mut args = vec![
             "--problems",
             fetch,
@@ -492,7 +492,7 @@ fn bench_plan_writes_results_json() {
             "--shortcut",
             "none",
             "--weights",
-            "none",
+            weights,
         ];
         if let Some(value) = tree_connect {
             args.extend(["--tree-connect", value]);
@@ -512,19 +512,19 @@ fn bench_plan_writes_results_json() {
         err.lines()
             .any(|l| l.starts_with(&format!("{robot}: ")) && l.ends_with(step))
     };
-    let (err, chosen) = lazy(None, "lazy.json");
+    let (err, chosen) = lazy(None, "none", "lazy.json");
     assert!(
         setup_ends(&err, "fetch", "LazyPRM step 4 rad, wedged ends grown greedily")
             && setup_ends(&err, "panda", "LazyPRM step the planner's default"),
         "{err}"
     );
-    let (err, off) = lazy(Some("false"), "lazy_off.json");
+    let (err, off) = lazy(Some("false"), "none", "lazy_off.json");
     assert!(
         setup_ends(&err, "fetch", "LazyPRM step 4 rad")
             && setup_ends(&err, "panda", "LazyPRM step the planner's default"),
         "--tree-connect false: {err}"
     );
-    let (err, on) = lazy(Some("true"), "lazy_on.json");
+    let (err, on) = lazy(Some("true"), "none", "lazy_on.json");
     assert!(
         setup_ends(&err, "fetch", "LazyPRM step 4 rad, wedged ends grown greedily")
             && setup_ends(
@@ -539,19 +539,7 @@ fn bench_plan_writes_results_json() {
         "Panda checks: chosen {chosen}, off {off}, on {on}"
     );
     // With the weights (the default), the Fetch's LazyPRM takes the step that goes with them.
-    let (err, _) = bench_json(
-        &[
-            "--problems",
-            fetch,
-            "--planner",
-            "lazyprm",
-            "--warm-up",
-            "0",
-            "--shortcut",
-            "none",
-        ],
-        "lazy_weighted.json",
-    );
+    let (err, _) = lazy(None, "reach", "lazy_weighted.json");
     assert!(
         setup_ends(&err, "fetch", "LazyPRM step 2 rad, wedged ends grown greedily")
             && err.contains("(the joints' reach)"),

@@ -635,33 +635,23 @@ fn panda_table_planners_with_reach_weights() {
     assert!((weighted.distance(&request.start, &wrist) - w[6]).abs() < 1e-12);
     assert!((weighted.distance(&request.start, &shoulder) - space.distance(&request.start, &shoulder)).abs() < 1e-12);
     let budget = budget(50_000);
-    solve(
-        "table/birrt/weighted",
-        BiRrt::default,
-        &weighted,
-        PANDA_RESOLUTION,
-        &mut v,
-        &request,
-        &budget,
-    );
-    solve(
-        "table/rrt/weighted",
-        Rrt::default,
-        &weighted,
-        PANDA_RESOLUTION,
-        &mut v,
-        &request,
-        &budget,
-    );
-    solve(
-        "table/lazy_prm/weighted",
-        LazyPrm::default,
-        &weighted,
-        PANDA_RESOLUTION,
-        &mut v,
-        &request,
-        &budget,
-    );
+    // The three planners' types differ: one call each, the same arguments.
+    macro_rules! weighted_solve {
+        ($label:literal, $make:expr) => {
+            solve(
+                $label,
+                $make,
+                &weighted,
+                PANDA_RESOLUTION,
+                &mut v,
+                &request,
+                &budget,
+            )
+        };
+    }
+    weighted_solve!("table/birrt/weighted", BiRrt::default);
+    weighted_solve!("table/rrt/weighted", Rrt::default);
+    weighted_solve!("table/lazy_prm/weighted", LazyPrm::default);
 }
 
 /// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
