@@ -16,7 +16,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use hearth_kinematics::parry3d::shape::SharedShape;
-use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, Num, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_kinematics::{Chain, IkSettings, IkSolver, IkTarget, SelfCollisionMatrix, SelfCollisionSettings};
 use hearth_planning::goal::PoseGoal;
 use hearth_planning::motion::finest_resolution;
 use hearth_planning::obstacles::ParryScene;
@@ -31,7 +31,7 @@ use hearth_sim::world::{BodyId, ContactRef, JointCommand, ModelHandle, World};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt};
 
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_positive};
 use crate::execution::Execution;
 
 /// How [`Arm::plan`] turns the smoothed (acceleration-bounded) motion into the jerk-limited
@@ -1289,20 +1289,15 @@ impl Arm {
                 m.direction
             )));
         }
-        for (what, x) in [("distance", m.distance), ("speed", m.speed), ("step", m.step)] {
-            if !x.is_finite() || x <= 0.0 {
-                return Err(SkillError::BadInput(format!(
-                    "linear move {what} {} must be positive",
-                    Num(x)
-                )));
-            }
-        }
-        if !m.force_limit.is_finite() || m.force_limit <= 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "linear move force limit {} must be positive",
-                m.force_limit
-            )));
-        }
+        require_positive(
+            "linear move ",
+            &[
+                ("distance", m.distance),
+                ("speed", m.speed),
+                ("step", m.step),
+                ("force limit", m.force_limit),
+            ],
+        )?;
         let base = world.base_pose(self.robot)?;
         let start_pose = base * self.start_tool_pose(world)?;
         let dir = m.direction / n;

@@ -24,7 +24,7 @@ use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, UnitQu
 use rand::Rng;
 
 use crate::arm::{Arm, ArmTarget, LinearMove, MotionReport, PoseMove, PoseReport};
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_positive};
 use crate::execution::Execution;
 
 /// Parameters of opening and closing.
@@ -156,10 +156,7 @@ pub fn close<R: Rng + ?Sized>(
 }
 
 fn check_amount(amount: f64) -> SkillResult<()> {
-    if !amount.is_finite() || amount <= 0.0 {
-        return Err(SkillError::BadInput(format!("amount {} must be positive", Num(amount))));
-    }
-    Ok(())
+    require_positive("", &[("amount", amount)])
 }
 
 /// The handle of the link moved by a joint: its centre, its outer face's coordinate along the
@@ -483,19 +480,18 @@ pub fn move_joint<R: Rng + ?Sized>(
 }
 
 fn check_settings(s: &ArticulatedSettings) -> SkillResult<()> {
-    for (what, x) in [
-        ("grip force", s.grip_force),
-        ("force limit", s.force_limit),
-        ("speed", s.speed),
-        ("approach", s.approach),
-        ("retreat", s.retreat),
-        ("finger reach", s.finger_reach),
-        ("max width", s.max_width),
-    ] {
-        if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("{what} {} must be positive", Num(x))));
-        }
-    }
+    require_positive(
+        "",
+        &[
+            ("grip force", s.grip_force),
+            ("force limit", s.force_limit),
+            ("speed", s.speed),
+            ("approach", s.approach),
+            ("retreat", s.retreat),
+            ("finger reach", s.finger_reach),
+            ("max width", s.max_width),
+        ],
+    )?;
     if !(0.0..=1.0).contains(&s.min_fraction) || s.min_fraction == 0.0 {
         return Err(SkillError::BadInput(format!(
             "minimum fraction {} must be in (0, 1]",

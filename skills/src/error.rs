@@ -1,6 +1,6 @@
 //! [`SkillError`]: why a skill failed, with a short machine-readable [`SkillError::reason`].
 
-use hearth_kinematics::KinematicsError;
+use hearth_kinematics::{KinematicsError, Num};
 use hearth_planning::PlanError;
 use hearth_sim::scene::SceneError;
 use hearth_sim::sensors::SensorError;
@@ -109,6 +109,30 @@ impl From<PlanError> for SkillError {
     }
 }
 
+/// `Ok` when every setting `(name, value)` is finite and above 0, else
+/// [`SkillError::BadInput`] naming the first that is not: "`{prefix}{name} {value} must be
+/// positive`", the value printed short ([`Num`]). The skills' settings checks share it.
+pub(crate) fn require_positive(prefix: &str, settings: &[(&str, f64)]) -> SkillResult<()> {
+    require(prefix, settings, true)
+}
+
+/// As [`require_positive`], for settings that may also be 0 ("… must be non-negative").
+pub(crate) fn require_non_negative(prefix: &str, settings: &[(&str, f64)]) -> SkillResult<()> {
+    require(prefix, settings, false)
+}
+
+fn require(prefix: &str, settings: &[(&str, f64)], strict: bool) -> SkillResult<()> {
+    let bad = |x: f64| !x.is_finite() || if strict { x <= 0.0 } else { x < 0.0 };
+    match settings.iter().find(|&&(_, x)| bad(x)) {
+        None => Ok(()),
+        Some(&(name, x)) => Err(SkillError::BadInput(format!(
+            "{prefix}{name} {} must be {}",
+            Num(x),
+            if strict { "positive" } else { "non-negative" }
+        ))),
+    }
+}
+
 /// Result of a skill.
 ///
 /// ```
@@ -120,3 +144,21 @@ impl From<PlanError> for SkillError {
 /// assert_eq!(checked_speed(-1.0).unwrap_err().reason(), "bad_input");
 /// ```
 pub type SkillResult<T> = Result<T, SkillError>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_checks_name_the_first_bad_setting_and_print_it_short() {
+        assert!(require_positive("push ", &[("speed", 0.1), ("distance", 0.3)]).is_ok());
+        let e = require_positive("push ", &[("speed", 0.1), ("distance", 0.0), ("force", -1.0)]).unwrap_err();
+        assert_eq!(e.to_string(), "bad input: push distance 0 must be positive");
+        let e = require_positive("", &[("amount", f64::NAN)]).unwrap_err();
+        assert_eq!(e.to_string(), "bad input: amount NaN must be positive");
+        assert!(require_non_negative("grasp ", &[("palm offset", 0.0)]).is_ok());
+        let e = require_non_negative("grasp ", &[("palm offset", -1e30)]).unwrap_err();
+        assert_eq!(e.to_string(), "bad input: grasp palm offset -1e30 must be non-negative");
+        assert_eq!(e.reason(), "bad_input");
+    }
+}

@@ -17,13 +17,13 @@
 //! pinches the wall's upper part. Rim grasps are tried nearest the robot first, then around
 //! the rim.
 
-use hearth_kinematics::{Num, to_pose};
+use hearth_kinematics::to_pose;
 use hearth_sim::world::{BodyId, GripperConfig, ModelHandle, World, WorldError};
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rand::Rng;
 
 use crate::arm::{Arm, ArmTarget, Held, LinearMove, LinearReport, MotionReport, approach_rotation};
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_non_negative, require_positive};
 use crate::execution::Execution;
 
 /// Which way a grasp approaches.
@@ -665,33 +665,25 @@ fn finger_contacts(world: &World, robot: ModelHandle, bodies: &[BodyId]) -> Resu
 }
 
 fn check_settings(s: &GraspSettings) -> SkillResult<()> {
-    for (what, x) in [
-        ("force", s.force),
-        ("max width", s.max_width),
-        ("approach", s.approach),
-        ("lift", s.lift),
-        ("speed", s.speed),
-    ] {
-        if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "grasp {what} {} must be positive",
-                Num(x)
-            )));
-        }
-    }
-    for (what, x) in [
-        ("palm offset", s.palm_offset),
-        ("palm half height", s.palm_half_height),
-        ("finger reach", s.finger_reach),
-        ("pad half height", s.pad_half_height),
-    ] {
-        if !x.is_finite() || x < 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "grasp {what} {} must be non-negative",
-                Num(x)
-            )));
-        }
-    }
+    require_positive(
+        "grasp ",
+        &[
+            ("force", s.force),
+            ("max width", s.max_width),
+            ("approach", s.approach),
+            ("lift", s.lift),
+            ("speed", s.speed),
+        ],
+    )?;
+    require_non_negative(
+        "grasp ",
+        &[
+            ("palm offset", s.palm_offset),
+            ("palm half height", s.palm_half_height),
+            ("finger reach", s.finger_reach),
+            ("pad half height", s.pad_half_height),
+        ],
+    )?;
     if s.attempts == 0 {
         return Err(SkillError::BadInput("grasp attempts must be at least 1".into()));
     }

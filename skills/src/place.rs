@@ -9,7 +9,7 @@
 //! [`Surface`] posed in the world ([`PlaceTarget::from_surface`]),
 //! or any rectangle.
 
-use hearth_kinematics::{Num, to_pose};
+use hearth_kinematics::to_pose;
 use hearth_planning::Obstacles;
 use hearth_sim::assets::Surface;
 use hearth_sim::world::{ModelHandle, World};
@@ -17,7 +17,7 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt};
 
 use crate::arm::{Arm, ArmTarget, LinearMove, MotionReport};
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_positive};
 use crate::execution::Execution;
 use crate::grasp::release;
 
@@ -119,11 +119,7 @@ impl PlaceTarget {
     /// # }
     /// ```
     pub fn surfaces_of(world: &World, model: ModelHandle, min_area: f64) -> SkillResult<Vec<Self>> {
-        if !min_area.is_finite() || min_area <= 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "minimum area {min_area} must be positive"
-            )));
-        }
+        require_positive("", &[("minimum area", min_area)])?;
         let m = world.model(model)?;
         let shape = m
             .link_shape(m.root())
@@ -421,19 +417,15 @@ pub fn place<R: Rng + ?Sized>(
 }
 
 fn check_settings(s: &PlaceSettings) -> SkillResult<()> {
-    for (what, x) in [
-        ("approach", s.approach),
-        ("speed", s.speed),
-        ("tolerance", s.tolerance),
-        ("retreat", s.retreat),
-    ] {
-        if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "place {what} {} must be positive",
-                Num(x)
-            )));
-        }
-    }
+    require_positive(
+        "place ",
+        &[
+            ("approach", s.approach),
+            ("speed", s.speed),
+            ("tolerance", s.tolerance),
+            ("retreat", s.retreat),
+        ],
+    )?;
     if !s.clearance.is_finite() || s.clearance < 0.0 || !s.spacing.is_finite() || s.spacing < 0.0 || s.samples == 0 {
         return Err(SkillError::BadInput(format!("place settings out of range: {s:?}")));
     }

@@ -8,7 +8,6 @@
 //! `min_motion`. The defaults follow the paper's settings: a 0.30 m push limited to 60 N and a
 //! 0.10 m success threshold.
 
-use hearth_kinematics::Num;
 use hearth_kinematics::parry3d::shape::Ball;
 use hearth_planning::Obstacles;
 use hearth_sim::sensors::{Camera, Modality, ModalitySet};
@@ -17,7 +16,7 @@ use nalgebra::{Isometry3, Point3, Translation3, Vector3};
 use rand::Rng;
 
 use crate::arm::{Arm, ArmTarget, LinearMove, LinearReport, MotionReport, approach_rotation};
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_non_negative, require_positive};
 use crate::execution::Execution;
 
 /// Settings of a push.
@@ -313,25 +312,16 @@ fn tilted(d: &Vector3<f64>, pitch: f64, yaw: f64) -> Vector3<f64> {
 }
 
 fn check_settings(s: &PushSettings) -> SkillResult<()> {
-    for (what, x) in [
-        ("distance", s.distance),
-        ("force limit", s.force_limit),
-        ("speed", s.speed),
-        ("grip force", s.grip_force),
-    ] {
-        if !x.is_finite() || x <= 0.0 {
-            return Err(SkillError::BadInput(format!("push {what} {} must be positive", Num(x))));
-        }
-    }
-    for (what, x) in [("standoff", s.standoff), ("minimum motion", s.min_motion)] {
-        if !x.is_finite() || x < 0.0 {
-            return Err(SkillError::BadInput(format!(
-                "push {what} {} must be non-negative",
-                Num(x)
-            )));
-        }
-    }
-    Ok(())
+    require_positive(
+        "push ",
+        &[
+            ("distance", s.distance),
+            ("force limit", s.force_limit),
+            ("speed", s.speed),
+            ("grip force", s.grip_force),
+        ],
+    )?;
+    require_non_negative("push ", &[("standoff", s.standoff), ("minimum motion", s.min_motion)])
 }
 
 #[cfg(test)]

@@ -58,7 +58,7 @@ use rand::Rng;
 pub use footprint::{BaseFootprint, FootprintValidity};
 pub use plan::NavPlan;
 
-use crate::error::{SkillError, SkillResult};
+use crate::error::{SkillError, SkillResult, require_positive};
 use crate::execution::Execution;
 use track::{Outcome, Totals, planar_pose};
 
@@ -366,11 +366,7 @@ impl Navigator {
     /// # }
     /// ```
     pub fn back_off(&self, world: &mut World, robot: ModelHandle, distance: f64) -> SkillResult<()> {
-        if !(distance.is_finite() && distance > 0.0) {
-            return Err(SkillError::BadInput(format!(
-                "back-off distance {distance} must be positive"
-            )));
-        }
+        require_positive("", &[("back-off distance", distance)])?;
         let footprint = self.footprint(world, robot)?;
         track::back_off(
             world,
