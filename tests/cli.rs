@@ -625,6 +625,33 @@ fn bench_plan_writes_results_json() {
     }
     let err = fails(&["bench", "plan", "--problems", data, "--weights", "heavy"]);
     assert!(err.contains("--weights"), "{err}");
+    // A weight schedule (BiRRT, the reach weights, one thread) is named on the setup line and
+    // plans; with another planner, without the weights or with racing copies it is refused,
+    // as is a malformed one.
+    let (err, v) = bench_json(
+        &["--only", "table_pick:1", "--weight-schedule", "2,0.5@50"],
+        "schedule.json",
+    );
+    assert!(
+        err.contains("BiRRT step 0.5 rad, other connection, the reach weights to the power 2, 0.5 from iteration 50"),
+        "{err}"
+    );
+    assert_eq!(v["results"][0]["success"], true, "{v}");
+    for (extra, says) in [
+        (&["--planner", "rrt"][..], "--planner birrt only"),
+        (&["--weights", "none"][..], "--weights none"),
+        (&["--threads", "2"][..], "one thread"),
+        (&[][..], "between 0 and 4"),
+    ] {
+        let schedule = if extra.is_empty() { "2,9@50" } else { "2" };
+        let args = [
+            &["bench", "plan", "--problems", data, "--weight-schedule", schedule][..],
+            extra,
+        ]
+        .concat();
+        let err = fails(&args);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
     // An iteration limit ends a plan that the time limit would not: the same plan on any
     // machine, stopped at the same iteration (or solved within it).
     let (_, v) = bench_json(

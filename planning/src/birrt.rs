@@ -314,8 +314,89 @@ impl<S: Space> Planner<S> for BiRrt {
         budget: &Budget,
         rng: &mut R,
     ) -> Result<Solution, PlanError> {
+        self.plan_with_metrics(motion, validator, request, budget, rng, &mut [])
+    }
+}
+
+impl BiRrt {
+    /// Plans as [`Planner::plan`] does, but changes the metric part-way: after `later[k].0`
+    /// iterations (in increasing order) the planner measures, steps and checks edges in the
+    /// space `later[k].1` (the same coordinates and bounds, other distance weights) instead of
+    /// the motion validator's. The trees are kept and their nearest-neighbour indexes rebuilt
+    /// for the new metric. Switching after a number of iterations, not of seconds, keeps a
+    /// plan reproducible: the same seed gives the same path on any machine. When the call
+    /// returns, every space is back where it was. A space of another dimension than the
+    /// motion validator's is [`PlanError::BadInput`].
+    ///
+    /// Different problems prefer different metrics: on the Fetch's MotionBenchMaker problems
+    /// strong distance weights (the joints' reach, squared) solve goals between cage bars
+    /// fastest and milder ones (its square roots) wedged bookshelf goals
+    /// (`docs/planning-log.md`, fifty-first round).
+    ///
+    /// ```
+    /// use hearth_planning::birrt::BiRrt;
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::planner::{Budget, Goal, PlanRequest};
+    /// use hearth_planning::space::JointSpace;
+    /// use hearth_planning::validity::StateValidator;
+    /// use rand::SeedableRng;
+    ///
+    /// struct Wall(u64);
+    /// impl StateValidator for Wall {
+    ///     fn is_valid(&mut self, q: &[f64]) -> bool { self.0 += 1; (q[0] - 0.5).abs() > 0.05 || q[1] > 0.8 }
+    ///     fn checks(&self) -> u64 { self.0 }
+    /// }
+    /// let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false])?;
+    /// let mild = space.clone().with_weights(&[1.0, 0.5])?;
+    /// let mut motion = MotionValidator::new(space.clone(), 0.01);
+    /// let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.1]));
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    /// let mut later = [(100, mild.clone())];
+    /// let solution = BiRrt::default()
+    ///     .plan_with_metrics(&mut motion, &mut Wall(0), &request, &Budget::iterations(10_000), &mut rng, &mut later)
+    ///     .unwrap();
+    /// assert!(solution.path.states.iter().any(|q| q[1] > 0.8));
+    /// assert_eq!((motion.space(), &later[0].1), (&space, &mild));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    pub fn plan_with_metrics<S: Space, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        request: &PlanRequest,
+        budget: &Budget,
+        rng: &mut R,
+        later: &mut [(u64, S)],
+    ) -> Result<Solution, PlanError> {
+        let mut switched = 0;
+        let result = self.plan_switching(motion, validator, request, budget, rng, later, &mut switched);
+        // Swapped back in reverse order: every space where it was.
+        for (_, space) in later[..switched].iter_mut().rev() {
+            motion.swap_space(space);
+        }
+        result
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn plan_switching<S: Space, V: StateValidator + ?Sized, R: Rng + ?Sized>(
+        &mut self,
+        motion: &mut MotionValidator<S>,
+        validator: &mut V,
+        request: &PlanRequest,
+        budget: &Budget,
+        rng: &mut R,
+        later: &mut [(u64, S)],
+        switched: &mut usize,
+    ) -> Result<Solution, PlanError> {
         let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
+        if let Some(k) = later.iter().position(|(_, s)| s.dim() != space.dim()) {
+            return Err(PlanError::BadInput(format!(
+                "metric {k} of the schedule has {} coordinates, the planning space {}",
+                later[k].1.dim(),
+                space.dim()
+            )));
+        }
         let range = resolve_range(space, self.range, BIRRT_RANGE_SCALE)?;
         let domain = match self.dynamic_domain {
             None => None,
@@ -361,6 +442,18 @@ impl<S: Space> Planner<S> for BiRrt {
                 return Err(PlanError::Timeout {
                     stats: run.stats(motion, validator, vec![trees[0].len(), trees[1].len()]),
                 });
+            }
+            if let Some((at, space)) = later.get_mut(*switched)
+                && run.iterations >= *at
+            {
+                *switched += 1;
+                motion.swap_space(space);
+                for t in &mut trees {
+                    t.tree.nn.reindex(motion.space());
+                }
+                for h in helpers.iter_mut().flatten() {
+                    h.reindex(motion.space());
+                }
             }
             // Alternate, unless balancing keeps the smaller tree growing.
             let (a, b) = (trees[grow].len(), trees[1 - grow].len());

@@ -317,6 +317,12 @@ pub(crate) fn try_step<S: Space, V: StateValidator + ?Sized>(
 }
 
 impl Helper {
+    /// Rebuilds the helper tree's nearest-neighbour index for `space` (a planner that changed
+    /// its metric).
+    pub(crate) fn reindex<S: Space>(&mut self, space: &S) {
+        self.tree.nn.reindex(space);
+    }
+
     /// Rooted at `roots`: each root's index in what the helper joins, and its state.
     pub(crate) fn new<'a>(roots: impl IntoIterator<Item = (usize, &'a [f64])>, dim: usize) -> Self {
         let mut tree = Tree::new(dim);

@@ -112,6 +112,24 @@ impl<S: Space> MotionValidator<S> {
         &self.space
     }
 
+    /// Swaps the validator's space with `space` (the resolution and the motion count stay).
+    ///
+    /// ```
+    /// use hearth_planning::motion::MotionValidator;
+    /// use hearth_planning::space::{JointSpace, Space};
+    ///
+    /// let plain = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+    /// let mut mv = MotionValidator::new(plain.clone(), 0.01);
+    /// let mut other = plain.clone().with_weights(&[0.5, 0.5])?;
+    /// mv.swap_space(&mut other);
+    /// assert_eq!(other.weights(), &[1.0, 1.0]);
+    /// assert_eq!(mv.space().distance(&[0.0; 2], &[1.0, 0.0]), 0.5);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    pub fn swap_space(&mut self, space: &mut S) {
+        std::mem::swap(&mut self.space, space);
+    }
+
     /// The resolution: the largest distance between two consecutive states checked along an
     /// edge.
     ///

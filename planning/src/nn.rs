@@ -270,6 +270,42 @@ impl NearestNeighbors {
         }
     }
 
+    /// Rebuilds the whole index for `space`: after it, pass that space to every call. For a
+    /// planner that changes its metric part-way (the states and their ids stay).
+    ///
+    /// ```
+    /// use hearth_planning::nn::NearestNeighbors;
+    /// use hearth_planning::space::JointSpace;
+    ///
+    /// let plain = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false])?;
+    /// let heavy_x = plain.clone().with_weights(&[10.0, 1.0])?;
+    /// let mut nn = NearestNeighbors::new(2);
+    /// nn.insert(&[0.2, 0.0]);
+    /// nn.insert(&[0.0, 0.5]);
+    /// assert_eq!(nn.nearest(&plain, &[0.0, 0.0]), Some(0));
+    /// nn.reindex(&heavy_x);
+    /// assert_eq!(nn.nearest(&heavy_x, &[0.0, 0.0]), Some(1));
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    pub fn reindex<S: Space>(&mut self, space: &S) {
+        let mut ids: Vec<u32> = std::mem::take(&mut self.trees)
+            .into_iter()
+            .flat_map(Tree::into_ids)
+            .collect();
+        ids.append(&mut self.buffer);
+        ids.retain(|&i| !self.removed[i as usize]);
+        ids.sort_unstable();
+        if !ids.is_empty() {
+            let tree = match weighted_metric(space, self.dim) {
+                Some((w, wraps)) => Tree::Kd(KdTree::build(&self.states, self.dim, w, wraps, ids)),
+                None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids)),
+            };
+            self.trees.push(tree);
+        }
+        self.buffer = Vec::with_capacity(BUFFER);
+        self.buffer_lanes.written = 0;
+    }
+
     /// Indexes a full buffer: merges it with the trees of equal size into one new tree.
     fn flush<S: Space>(&mut self, space: &S) {
         if self.buffer.len() < BUFFER {

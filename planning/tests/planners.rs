@@ -654,6 +654,65 @@ fn panda_table_planners_with_reach_weights() {
     weighted_solve!("table/lazy_prm/weighted", LazyPrm::default);
 }
 
+/// BiRRT that changes its metric part-way ([`BiRrt::plan_with_metrics`]): the reach weights
+/// squared first, their square roots after a few iterations. Solved, valid in the plain space,
+/// the same path for the same seed, and every space back where it was.
+#[test]
+fn panda_table_birrt_switching_metrics() {
+    let (space, mut v) = table_world();
+    let w = v.joint_weights();
+    let powered = |p: f64| {
+        let wp: Vec<f64> = w.iter().map(|x| x.powf(p)).collect();
+        space.clone().with_weights(&wp).unwrap()
+    };
+    let (strong, mild) = (powered(2.0), powered(0.5));
+    let request = table_request();
+    let mut plan = |switch_at: u64| {
+        let mut motion = MotionValidator::new(strong.clone(), PANDA_RESOLUTION);
+        let mut later = [(switch_at, mild.clone())];
+        let s = BiRrt::default()
+            .plan_with_metrics(
+                &mut motion,
+                &mut v,
+                &request,
+                &budget(50_000),
+                &mut Pcg64Mcg::seed_from_u64(5),
+                &mut later,
+            )
+            .unwrap();
+        assert_eq!((motion.space(), &later[0].1), (&strong, &mild), "spaces swapped back");
+        s
+    };
+    let (a, b) = (plan(3), plan(3));
+    assert_eq!(a.path, b.path);
+    assert!(a.stats.iterations > 3, "the switch happened: {:?}", a.stats);
+    // Switching at once is not the same as never switching: the mild metric chose other states.
+    let never = plan(u64::MAX);
+    assert_ne!(a.path, never.path);
+    for s in [&a, &never] {
+        check_solution(&space, PANDA_RESOLUTION, &mut v, &request, s);
+    }
+    // A metric of another dimension is bad input, and changes nothing.
+    let flat = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap();
+    let mut motion = MotionValidator::new(strong.clone(), PANDA_RESOLUTION);
+    let mut later = [(3, flat.clone())];
+    let e = BiRrt::default()
+        .plan_with_metrics(
+            &mut motion,
+            &mut v,
+            &request,
+            &budget(50_000),
+            &mut Pcg64Mcg::seed_from_u64(5),
+            &mut later,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&e, PlanError::BadInput(m) if m.contains("2 coordinates")),
+        "{e}"
+    );
+    assert_eq!((motion.space(), &later[0].1), (&strong, &flat));
+}
+
 /// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
 #[test]
 fn panda_table_birrt_race() {

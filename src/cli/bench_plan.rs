@@ -25,6 +25,7 @@ use rand::SeedableRng;
 use serde_json::{Value, json};
 
 use super::bench::percentile;
+use super::weight_schedule::WeightSchedule;
 
 /// Which planner to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -135,6 +136,17 @@ pub struct BenchPlanArgs {
     /// of the Fetch's problems, and faster. See `docs/planning-log.md`.
     #[arg(long, value_enum)]
     weights: Option<WeightsArg>,
+    /// BiRRT only: change the distance weights part-way through each plan
+    /// (`BiRrt::plan_with_metrics`; the trees are kept): powers of the joints' reach weights,
+    /// each from an iteration on, e.g. `2,1@160000,0.5@360000` (the squared weights first, the
+    /// weights themselves from iteration 160,000, their square roots from 360,000). A single
+    /// power plans with it throughout; `1` is `--weights reach`. Needs the reach weights and
+    /// one thread. When absent: `2,1@160000,0.5@360000` for the Fetch (the squared weights
+    /// plan its open and cage problems fastest, milder ones its wedged bookshelf goals), none
+    /// for the Panda (the squared weights planned its cage more slowly). See
+    /// `docs/planning-log.md`.
+    #[arg(long, value_name = "POWER[@ITERATION],...")]
+    weight_schedule: Option<WeightSchedule>,
     /// BiRRT only: dynamic-domain sampling with this radius, in multiples of the step (the
     /// minimum radius is a quarter of it). Off by default: see `docs/planning-log.md`.
     #[arg(long)]
@@ -266,6 +278,26 @@ fn weighted(a: &BenchPlanArgs) -> bool {
     a.weights != Some(WeightsArg::None)
 }
 
+/// The Fetch's BiRRT weight schedule when none is given: the reach weights squared, then as
+/// they are from iteration 160,000 (about 0.2 s on the 2-vCPU benchmark machine), then their
+/// square roots from 360,000. The squared weights plan the Fetch's cage and open problems
+/// fastest, the square roots its wedged bookshelf goals more often (fifty-first round).
+const FETCH_SCHEDULE: &str = "2,1@160000,0.5@360000";
+
+/// BiRRT's weight schedule (`--weight-schedule`; by default [`FETCH_SCHEDULE`] for the Fetch
+/// and none for other robots), or `None` to plan in one metric throughout. Only BiRRT with the
+/// reach weights on one thread takes one.
+fn schedule_for(robot: &str, a: &BenchPlanArgs) -> Option<WeightSchedule> {
+    if a.planner != PlannerKind::Birrt || !weighted(a) || a.threads > 1 {
+        return None;
+    }
+    match (&a.weight_schedule, robot) {
+        (Some(s), _) => Some(s.clone()),
+        (None, "fetch") => Some(FETCH_SCHEDULE.parse().expect("the default schedule parses")),
+        (None, _) => None,
+    }
+}
+
 /// The pocket escape the arguments ask for (BiRRT's and LazyPRM's): `None` with `--no-escape`.
 fn escape_for(a: &BenchPlanArgs) -> Option<Escape> {
     (!a.no_escape).then(|| {
@@ -348,6 +380,8 @@ struct RobotSetup {
     chain: Chain,
     /// The planning space (weighted or not, see [`weighted`]).
     space: JointSpace,
+    /// The joints' reach weights when the planning space takes them.
+    reach: Option<Vec<f64>>,
     /// The same space without weights: smoothing, the re-check and the reported path lengths
     /// run in it (radians, and metres for prismatic joints) whatever the planner's metric.
     plain: JointSpace,
@@ -415,22 +449,24 @@ fn setup(
         ));
     }
     let plain = JointSpace::from_chain(&chain).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let space = if weighted {
-        let v = RobotValidity::new(chain.clone(), matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
-        let w = v.joint_weights();
+    let reach = weighted.then(|| {
+        RobotValidity::new(chain.clone(), matrix.clone(), Arc::new(ParryScene::new(Vec::new()))).joint_weights()
+    });
+    let space = if let Some(w) = &reach {
         let shown: Vec<String> = w.iter().map(|x| format!("{x:.2}")).collect();
         let sep = if note.is_empty() { "" } else { "; " };
         note.push_str(&format!(
             "{sep}distance weights {} (the joints' reach)",
             shown.join(", ")
         ));
-        plain.clone().with_weights(&w).map_err(|e| anyhow::anyhow!("{e}"))?
+        plain.clone().with_weights(w).map_err(|e| anyhow::anyhow!("{e}"))?
     } else {
         plain.clone()
     };
     Ok(RobotSetup {
         limits: Limits::for_chain(&chain),
         space,
+        reach,
         plain,
         chain,
         matrix,
@@ -503,6 +539,17 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     }
     if a.no_escape && tunes_escape {
         bail!("--escape-probe, --escape-share and --escape-reset set the escape that --no-escape turns off");
+    }
+    if a.weight_schedule.is_some() {
+        if a.planner != PlannerKind::Birrt {
+            bail!("--weight-schedule applies to --planner birrt only");
+        }
+        if !weighted(&a) {
+            bail!("--weight-schedule takes powers of the reach weights, which --weights none turns off");
+        }
+        if a.threads > 1 {
+            bail!("--weight-schedule plans on one thread: racing copies (--threads) keep one metric");
+        }
     }
     if a.connect.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--connect applies to --planner birrt only");
@@ -583,7 +630,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                         Connect::Other => "other",
                         Connect::Onward => "onward",
                     };
-                    format!("BiRRT step {range}, {connect} connection")
+                    let schedule = schedule_for(&set.robot, &a)
+                        .map(|w| format!(", the reach weights to the power {w}"))
+                        .unwrap_or_default();
+                    format!("BiRRT step {range}, {connect} connection{schedule}")
                 }
                 PlannerKind::Rrt => {
                     let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
@@ -626,7 +676,20 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             setups.insert(set.robot.clone(), s);
         }
         let rs = &setups[&set.robot];
-        let space = &rs.space;
+        // The planning space, and the spaces a weight schedule switches to (BiRRT only).
+        let (space, mut later) = match (&rs.reach, schedule_for(&set.robot, &a)) {
+            (Some(reach), Some(schedule)) => {
+                let mut spaces = schedule
+                    .spaces(reach)
+                    .into_iter()
+                    .map(|(at, w)| rs.plain.clone().with_weights(&w).map(|s| (at, s)))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                let (_, first) = spaces.remove(0);
+                (first, spaces)
+            }
+            _ => (rs.space.clone(), Vec::new()),
+        };
         let (birrt, rrt) = (birrt_for(&set.robot, &a), rrt_for(&set.robot, a.range, a.goal_zone));
         for problem in &set.problems {
             for rep in 0..a.repeat {
@@ -666,6 +729,11 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 let outcome = match a.planner {
                     PlannerKind::Rrt => {
                         Race::new(rrt.clone(), threads).plan(&mut motion, &mut v, &request, &budget, &mut rng)
+                    }
+                    PlannerKind::Birrt if !later.is_empty() => {
+                        birrt
+                            .clone()
+                            .plan_with_metrics(&mut motion, &mut v, &request, &budget, &mut rng, &mut later)
                     }
                     PlannerKind::Birrt => {
                         Race::new(birrt.clone(), threads).plan(&mut motion, &mut v, &request, &budget, &mut rng)

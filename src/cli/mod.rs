@@ -13,6 +13,7 @@ mod home;
 mod kin;
 mod render;
 mod scene;
+mod weight_schedule;
 
 use clap::{Parser, Subcommand};
 
