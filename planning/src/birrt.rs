@@ -22,7 +22,7 @@ use crate::validity::StateValidator;
 /// tree of short steps for a tree that barely grows) are on by default; dynamic-domain
 /// sampling ([`DynamicDomain`]) is available but off, because it lowered success on the
 /// MotionBenchMaker problems (`docs/planning-log.md`). [`BiRrt::plain`] is the textbook
-/// algorithm.
+/// algorithm; [`BiRrt::plan_with_metrics`] changes the metric part-way through a plan.
 ///
 /// One iteration is one sample. Settings are serde-derivable.
 ///
