@@ -295,15 +295,7 @@ impl NearestNeighbors {
         ids.append(&mut self.buffer);
         ids.retain(|&i| !self.removed[i as usize]);
         ids.sort_unstable();
-        if !ids.is_empty() {
-            let tree = match weighted_metric(space, self.dim) {
-                Some((w, wraps)) => Tree::Kd(KdTree::build(&self.states, self.dim, w, wraps, ids)),
-                None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids)),
-            };
-            self.trees.push(tree);
-        }
-        self.buffer = Vec::with_capacity(BUFFER);
-        self.buffer_lanes.written = 0;
+        self.index(space, ids);
     }
 
     /// Indexes a full buffer: merges it with the trees of equal size into one new tree.
@@ -318,6 +310,11 @@ impl NearestNeighbors {
         }
         // Drop removed states while rebuilding.
         ids.retain(|&i| !self.removed[i as usize]);
+        self.index(space, ids);
+    }
+
+    /// Builds one tree over the live states `ids` (none for no ids) and starts an empty buffer.
+    fn index<S: Space>(&mut self, space: &S, ids: Vec<u32>) {
         if !ids.is_empty() {
             let tree = match weighted_metric(space, self.dim) {
                 Some((w, wraps)) => Tree::Kd(KdTree::build(&self.states, self.dim, w, wraps, ids)),

@@ -34,6 +34,20 @@ fn se2_space() -> Se2Space {
 
 /// Inserts `n` samples (removing every `remove_every`-th), then compares queries with a scan.
 fn agrees_with_brute_force<S: Space>(space: &S, seed: u64, n: usize, remove_every: usize, k: usize, radius: f64) {
+    agrees_after_reindex(space, space, seed, n, remove_every, k, radius);
+}
+
+/// As [`agrees_with_brute_force`], but the states are inserted and queried under `first`'s
+/// metric, then re-indexed for `space` ([`NearestNeighbors::reindex`]) and compared under it.
+fn agrees_after_reindex<S: Space>(
+    first: &S,
+    space: &S,
+    seed: u64,
+    n: usize,
+    remove_every: usize,
+    k: usize,
+    radius: f64,
+) {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let dim = space.dim();
     let mut nn = NearestNeighbors::new(dim);
@@ -46,6 +60,12 @@ fn agrees_with_brute_force<S: Space>(space: &S, seed: u64, n: usize, remove_ever
         if remove_every > 0 && i % remove_every == remove_every - 1 {
             nn.remove(i / 2);
         }
+    }
+    if !std::ptr::eq(first, space) {
+        // Queries under the first metric index the buffer in trees built for it.
+        space.sample(&mut rng, &mut q);
+        nn.nearest(first, &q);
+        nn.reindex(space);
     }
     let live: Vec<usize> = (0..n).filter(|&i| !nn.is_removed(i)).collect();
     assert_eq!(nn.len(), live.len());
@@ -70,6 +90,14 @@ proptest! {
     #[test]
     fn joint_space_with_continuous_joints(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
         agrees_with_brute_force(&joint_space(), seed, n, remove, k, 1.0);
+    }
+
+    #[test]
+    fn reindexed_for_other_weights(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12, w in proptest::collection::vec(0.0f64..3.0, 5)) {
+        let other = euclidean_space().with_weights(&w).unwrap();
+        agrees_after_reindex(&euclidean_space(), &other, seed, n, remove, k, 1.0);
+        let wrapping = joint_space().with_weights(&w[..4]).unwrap();
+        agrees_after_reindex(&joint_space(), &wrapping, seed, n, remove, k, 1.0);
     }
 
     #[test]

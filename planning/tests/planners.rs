@@ -667,50 +667,38 @@ fn panda_table_birrt_switching_metrics() {
     };
     let (strong, mild) = (powered(2.0), powered(0.5));
     let request = table_request();
-    let mut plan = |switch_at: u64| {
+    // Plans from the strong metric, switching to `then` after `at` iterations; every space
+    // must be back in place afterwards.
+    let mut plan = |at: u64, then: &JointSpace| {
         let mut motion = MotionValidator::new(strong.clone(), PANDA_RESOLUTION);
-        let mut later = [(switch_at, mild.clone())];
-        let s = BiRrt::default()
-            .plan_with_metrics(
-                &mut motion,
-                &mut v,
-                &request,
-                &budget(50_000),
-                &mut Pcg64Mcg::seed_from_u64(5),
-                &mut later,
-            )
-            .unwrap();
-        assert_eq!((motion.space(), &later[0].1), (&strong, &mild), "spaces swapped back");
-        s
-    };
-    let (a, b) = (plan(3), plan(3));
-    assert_eq!(a.path, b.path);
-    assert!(a.stats.iterations > 3, "the switch happened: {:?}", a.stats);
-    // Switching at once is not the same as never switching: the mild metric chose other states.
-    let never = plan(u64::MAX);
-    assert_ne!(a.path, never.path);
-    for s in [&a, &never] {
-        check_solution(&space, PANDA_RESOLUTION, &mut v, &request, s);
-    }
-    // A metric of another dimension is bad input, and changes nothing.
-    let flat = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap();
-    let mut motion = MotionValidator::new(strong.clone(), PANDA_RESOLUTION);
-    let mut later = [(3, flat.clone())];
-    let e = BiRrt::default()
-        .plan_with_metrics(
+        let mut later = [(at, then.clone())];
+        let s = BiRrt::default().plan_with_metrics(
             &mut motion,
             &mut v,
             &request,
             &budget(50_000),
             &mut Pcg64Mcg::seed_from_u64(5),
             &mut later,
-        )
-        .unwrap_err();
+        );
+        assert_eq!((motion.space(), &later[0].1), (&strong, then), "spaces swapped back");
+        s
+    };
+    let (a, b) = (plan(3, &mild).unwrap(), plan(3, &mild).unwrap());
+    assert_eq!(a.path, b.path);
+    assert!(a.stats.iterations > 3, "the switch happened: {:?}", a.stats);
+    // Switching at once is not the same as never switching: the mild metric chose other states.
+    let never = plan(u64::MAX, &mild).unwrap();
+    assert_ne!(a.path, never.path);
+    // A metric of another dimension is bad input.
+    let flat = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap();
+    let e = plan(3, &flat).unwrap_err();
     assert!(
         matches!(&e, PlanError::BadInput(m) if m.contains("2 coordinates")),
         "{e}"
     );
-    assert_eq!((motion.space(), &later[0].1), (&strong, &flat));
+    for s in [&a, &never] {
+        check_solution(&space, PANDA_RESOLUTION, &mut v, &request, s);
+    }
 }
 
 /// The robot's own validator in a [`Race`] of two BiRRT copies: valid, and the same path twice.
