@@ -637,6 +637,9 @@ fn bench_plan_writes_results_json() {
         "{err}"
     );
     assert_eq!(v["results"][0]["success"], true, "{v}");
+    // The JSON file keeps the setup line.
+    let line = v["setup"]["panda"].as_str().unwrap_or_default();
+    assert!(line.contains("0.5 from iteration 50") && err.contains(line), "{line}");
     for (extra, says) in [
         (&["--planner", "rrt"][..], "--planner birrt only"),
         (&["--weights", "none"][..], "--weights none"),

@@ -595,6 +595,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     super::bench::create_json(a.json.as_deref())?;
     let total: usize = sets.iter().map(|(s, _)| s.problems.len()).sum::<usize>() * a.repeat as usize;
     let mut setups: BTreeMap<String, RobotSetup> = BTreeMap::new();
+    // Each robot's setup line (fingers, weights, step, schedule), for the JSON file as well.
+    let mut setup_lines: BTreeMap<String, String> = BTreeMap::new();
     let mut results = Vec::new();
     let mut done = 0usize;
     let progress = Progress::new(total);
@@ -661,6 +663,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 .filter(|part| !part.is_empty())
                 .collect();
             eprintln!("{}: {}", set.robot, about.join("; "));
+            setup_lines.insert(set.robot.clone(), about.join("; "));
             if a.warm_up > 0 {
                 let mut v =
                     RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
@@ -915,7 +918,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(path) = a.json {
-        let out = json!({"results": results, "summary": summary});
+        let out = json!({"results": results, "summary": summary, "setup": setup_lines});
         std::fs::write(&path, serde_json::to_string(&out)?).with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }
