@@ -857,9 +857,10 @@ impl RobotValidity {
     /// of the robot (`Σⱼ Rⱼ·|Δⱼ| ≤ max R · √n · length`, as for [`RobotValidity`]'s free
     /// regions) is the same as without them, but for it a wrist turns further than a
     /// shoulder. A tree then steps about equally far in the workspace whichever joints it
-    /// moves, and a planner's edges are checked about equally densely in the workspace. A joint that moves nothing checked weighs the least allowed, 0.001, so
-    /// that every joint still counts in the distance (a goal differs from a state short of it);
-    /// a chain that moves nothing checked gets weights of 1.
+    /// moves, and a planner's edges are checked about equally densely in the workspace. A
+    /// joint that moves nothing checked weighs the least allowed, 0.001, so that every joint
+    /// still counts in the distance (a goal differs from a state short of it); a chain that
+    /// moves nothing checked gets weights of 1.
     ///
     /// ```
     /// use hearth_planning::obstacles::ParryScene;

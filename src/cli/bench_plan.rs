@@ -662,8 +662,9 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                 .flatten()
                 .filter(|part| !part.is_empty())
                 .collect();
-            eprintln!("{}: {}", set.robot, about.join("; "));
-            setup_lines.insert(set.robot.clone(), about.join("; "));
+            let line = about.join("; ");
+            eprintln!("{}: {line}", set.robot);
+            setup_lines.insert(set.robot.clone(), line);
             if a.warm_up > 0 {
                 let mut v =
                     RobotValidity::new(s.chain.clone(), s.matrix.clone(), Arc::new(ParryScene::new(Vec::new())));
