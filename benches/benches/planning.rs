@@ -12,6 +12,8 @@
 //! torso and arm (three continuous joints), the size of a LazyPRM roadmap after a few tenths
 //! of a second. `queries/…` plans 16 queries between random valid configurations in one
 //! scene: BiRRT, a fresh LazyPRM per query, and one LazyPRM that keeps its roadmap.
+//! `pipeline/…` plans the table_pick problems through `MotionPlanner` (BiRRT, parabolic
+//! smoothing, the check at 0.002 rad), in the joints' reach metric and without it.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -19,6 +21,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
 use hearth_planning::problem::ProblemSet;
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::JointSpace;
@@ -115,6 +118,33 @@ fn planners(c: &mut Criterion) {
     g.bench_function("lazyprm", |b| {
         b.iter(|| black_box(plan_all(&mut f, || LazyPrm::new(LazyPrmSettings::default()))))
     });
+    g.finish();
+
+    // The whole chain through `MotionPlanner` (BiRRT, parabolic smoothing, checked at 0.002
+    // rad) with its defaults, in the joints' reach metric and without it.
+    let mut g = c.benchmark_group("pipeline/panda_table_pick");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    for (name, reach_weights) in [("reach", true), ("unweighted", false)] {
+        let settings = MotionSettings {
+            reach_weights,
+            ..MotionSettings::default()
+        };
+        let mut planners: Vec<MotionPlanner> = f
+            .validity
+            .iter()
+            .map(|v| MotionPlanner::new(v.clone(), settings.clone()).expect("default settings"))
+            .collect();
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+                let mut solved = 0;
+                for (p, r) in planners.iter_mut().zip(&f.requests) {
+                    solved += p.plan(&r.start, r.goal.clone(), &Budget::time(1.0), &mut rng).is_ok() as usize;
+                }
+                black_box(solved)
+            })
+        });
+    }
     g.finish();
 
     // Many queries in one static scene (the first table_pick problem's): 16 queries between

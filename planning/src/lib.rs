@@ -16,6 +16,8 @@
 //! - [`shortcut`]: repair at a fine resolution, random and acceleration-bounded (parabolic)
 //!   shortcutting; [`trajectory`]: timed motions (trapezoids, Ruckig ramps, jerk-limited
 //!   motions through waypoints) within per-joint [`trajectory::Limits`].
+//! - [`pipeline`]: [`MotionPlanner`], all of the above in one call with the benchmarks'
+//!   settings: a start and a goal in, a timed, checked motion out.
 //! - [`problem`]: benchmark problem files (MotionBenchMaker JSON).
 //!
 //! A Panda arm swinging around a post: the straight motion is blocked, [`BiRrt`] finds a way
@@ -72,6 +74,7 @@ pub mod motion;
 pub mod nn;
 pub mod obstacles;
 mod pair_lanes;
+pub mod pipeline;
 pub mod planner;
 pub mod problem;
 pub mod race;
@@ -90,6 +93,7 @@ pub use lazy_prm::{LazyPrm, LazyPrmSettings};
 pub use motion::MotionValidator;
 pub use nn::NearestNeighbors;
 pub use obstacles::{Obstacles, ParryScene};
+pub use pipeline::{MotionPlanner, MotionSettings, PlannedMotion};
 pub use planner::{Budget, Goal, Path, PlanRequest, PlanStats, Planner, Solution};
 pub use race::Race;
 pub use rrt::Rrt;

@@ -1,0 +1,448 @@
+//! [`MotionPlanner`]: a chain's planner, its post-processing and the final check in one value,
+//! set up the way `hearth bench plan` plans MotionBenchMaker's problems.
+//!
+//! Planning a timed motion takes several parts: a [`RobotValidity`], a planning space with the
+//! joints' reach as distance weights, a [`MotionValidator`] for the planner's edges, a planner
+//! with a step tuned to that metric, an unweighted space in which the path is shortcut and
+//! timed within the chain's [`Limits`], and a check of the timed motion at a fine resolution.
+//! [`MotionPlanner`] holds them, with the settings the benchmarks chose
+//! ([`MotionSettings::default`]), and turns a start and a goal into a [`PlannedMotion`] in one
+//! call. Every part stays reachable for what the defaults do not cover (another planner, other
+//! limits, objects attached to the gripper).
+
+use std::time::{Duration, Instant};
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::birrt::BiRrt;
+use crate::error::PlanError;
+use crate::motion::{MotionValidator, checked_resolution};
+use crate::planner::{Budget, Goal, Path, PlanRequest, PlanStats, Planner};
+use crate::shortcut::{ShortcutSettings, Smoothing, smooth};
+use crate::space::JointSpace;
+use crate::trajectory::{Limits, Trajectory};
+use crate::validity::RobotValidity;
+
+/// Settings of a [`MotionPlanner`]. The defaults are those of `hearth bench plan` on
+/// MotionBenchMaker's Panda and Fetch problems (`docs/benchmarks.md`): BiRRT in the joints'
+/// reach metric with edges checked every 1/32, parabolic shortcutting, and a check of the timed
+/// motion every 0.002 rad.
+///
+/// ```
+/// let s = hearth_planning::pipeline::MotionSettings::default();
+/// assert!(s.reach_weights && s.range.is_none());
+/// assert_eq!((s.resolution, s.fine_resolution), (1.0 / 32.0, 0.002));
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MotionSettings {
+    /// Plan in the joints' reach metric ([`RobotValidity::joint_weights`]: a wrist weighs less
+    /// than a shoulder, so every step moves the robot about equally far). With it, every
+    /// planner solved more of the Fetch's benchmark problems, and faster (fiftieth round of
+    /// `docs/planning-log.md`). Smoothing, timing and the final check are unweighted either way.
+    pub reach_weights: bool,
+    /// The default planner's longest step, in the planning metric. `None`: with the reach
+    /// weights 0.5 for a chain of up to seven joints and 0.4 for a longer one (the Panda's and
+    /// the Fetch's benchmark settings), without them [`BiRrt`]'s own default.
+    pub range: Option<f64>,
+    /// Spacing of the planner's edge checks, in the planning metric.
+    pub resolution: f64,
+    /// Spacing (rad, unweighted) at which shortcuts, repairs and the timed motion are
+    /// checked: at most `resolution`.
+    pub fine_resolution: f64,
+    /// Post-processing of the planner's path.
+    pub smoothing: Smoothing,
+    /// Shortcut attempts per stage of the post-processing.
+    pub shortcut_attempts: usize,
+    /// Wall-clock budget of the post-processing, after which it returns what it has (still
+    /// checked).
+    pub smoothing_time: Duration,
+}
+
+impl Default for MotionSettings {
+    fn default() -> Self {
+        Self {
+            reach_weights: true,
+            range: None,
+            resolution: 1.0 / 32.0,
+            fine_resolution: 0.002,
+            smoothing: Smoothing::Parabolic,
+            shortcut_attempts: 100,
+            smoothing_time: Duration::from_secs(1),
+        }
+    }
+}
+
+/// A timed, checked motion from [`MotionPlanner::plan`].
+#[derive(Clone, Debug)]
+pub struct PlannedMotion {
+    /// The motion in time, within the planner's [`Limits`]: sample positions, velocities and
+    /// accelerations at any time.
+    pub trajectory: Trajectory,
+    /// The post-processed geometric path (states at most the motion validator's resolution
+    /// apart for a parabolic trajectory, the shortcut waypoints otherwise).
+    pub path: Path,
+    /// The planner's own path, before post-processing.
+    pub planned: Path,
+    /// The planner's statistics (time, iterations, states and motions checked, tree sizes).
+    pub stats: PlanStats,
+    /// Wall-clock time of the post-processing.
+    pub smoothing_time: Duration,
+    /// Edges of the planner's path that failed at the fine resolution and were re-planned.
+    pub repaired: usize,
+}
+
+/// A chain's planner with its post-processing: states checked by a [`RobotValidity`], a
+/// planner ([`BiRrt`] unless [`with_planner`](MotionPlanner::with_planner) sets another) in
+/// the joints' reach metric, then shortcutting and timing within the chain's limits, checked at
+/// the fine resolution ([`MotionSettings`]).
+///
+/// The planner value is kept between calls, so a [`LazyPrm`](crate::LazyPrm) given to
+/// [`with_planner`](MotionPlanner::with_planner) reuses its roadmap while the obstacles stay
+/// the same. Bad input (a start or goal of the wrong length, NaN or outside the limits, in
+/// collision) is a typed [`PlanError`] that names the contact, and leaves the planner as it
+/// was.
+///
+/// ```
+/// use std::sync::Arc;
+/// use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+/// use hearth_planning::obstacles::Obstacle;
+/// use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+/// use hearth_planning::{Budget, Goal, ParryScene, RobotValidity};
+/// use parry3d::math::{Pose, Vector};
+/// use rand::SeedableRng;
+///
+/// let panda = RobotModel::builtin("panda")?;
+/// let arm = Chain::named(&panda, "arm")?;
+/// let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+/// let post = Obstacle::cuboid("post", Pose::translation(0.5, 0.0, 0.3), Vector::new(0.05, 0.05, 0.3));
+/// let validity = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![post])));
+/// let mut planner = MotionPlanner::new(validity, MotionSettings::default())?;
+///
+/// let start = [-0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785];
+/// let goal = vec![0.6, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785];
+/// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(0);
+/// let motion = planner.plan(&start, Goal::Config(goal.clone()), &Budget::time(1.0), &mut rng)?;
+/// let mut end = vec![0.0; 7];
+/// motion.trajectory.sample(motion.trajectory.duration(), &mut end, None);
+/// assert!(end.iter().zip(&goal).all(|(a, b)| (a - b).abs() < 1e-9));
+///
+/// // Through the post: the start is refused, naming the contact.
+/// let err = planner.plan(&[0.0, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785], Goal::Config(goal), &Budget::time(1.0), &mut rng);
+/// assert!(err.unwrap_err().to_string().contains("post"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct MotionPlanner<P = BiRrt> {
+    validity: RobotValidity,
+    planner: P,
+    /// Edges in the planning metric.
+    motion: MotionValidator<JointSpace>,
+    /// Edges in the unweighted space: post-processing and the final check.
+    plain: MotionValidator<JointSpace>,
+    limits: Limits,
+    settings: MotionSettings,
+}
+
+impl<P: std::fmt::Debug> std::fmt::Debug for MotionPlanner<P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MotionPlanner")
+            .field("chain", &self.validity.chain().joint_names())
+            .field("planner", &self.planner)
+            .field("settings", &self.settings)
+            .finish()
+    }
+}
+
+impl MotionPlanner<BiRrt> {
+    /// A planner for `validity`'s chain with [`BiRrt`] and the chain's limits
+    /// ([`Limits::for_chain`]).
+    ///
+    /// # Errors
+    /// [`PlanError::BadInput`] for a resolution that is not positive and finite or finer than
+    /// the chain's space allows, a fine resolution coarser than the resolution, a step that is
+    /// not positive and finite, or a smoothing budget that is zero.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// assert!(MotionPlanner::new(validity.clone(), MotionSettings::default()).is_ok());
+    /// let coarse = MotionSettings { fine_resolution: 0.1, ..Default::default() };
+    /// assert!(MotionPlanner::new(validity, coarse).unwrap_err().to_string().contains("fine resolution"));
+    /// ```
+    pub fn new(validity: RobotValidity, settings: MotionSettings) -> Result<Self, PlanError> {
+        let plain = JointSpace::from_chain(validity.chain()).map_err(|e| PlanError::BadInput(e.to_string()))?;
+        let space = if settings.reach_weights {
+            plain
+                .clone()
+                .with_weights(&validity.joint_weights())
+                .map_err(|e| PlanError::BadInput(e.to_string()))?
+        } else {
+            plain.clone()
+        };
+        let motion = MotionValidator::try_new(space, settings.resolution)?;
+        let fine = checked_resolution(&plain, "fine resolution", settings.fine_resolution)?;
+        if fine > settings.resolution {
+            return Err(PlanError::BadInput(format!(
+                "the fine resolution ({fine}) must be at most the resolution ({})",
+                settings.resolution
+            )));
+        }
+        if let Some(r) = settings.range
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(PlanError::BadInput(format!(
+                "the step (range) is {r}; it must be positive and finite"
+            )));
+        }
+        if settings.smoothing_time.is_zero() {
+            return Err(PlanError::BadInput("the smoothing time is zero".into()));
+        }
+        let dof = validity.chain().dof();
+        let range = settings
+            .range
+            .or_else(|| settings.reach_weights.then_some(if dof <= 7 { 0.5 } else { 0.4 }));
+        Ok(Self {
+            limits: Limits::for_chain(validity.chain()),
+            planner: BiRrt::with_range(range),
+            plain: MotionValidator::try_new(plain, settings.resolution)?,
+            motion,
+            validity,
+            settings,
+        })
+    }
+}
+
+impl<P: Planner<JointSpace>> MotionPlanner<P> {
+    /// The same set-up with another planner (its own step: [`MotionSettings::range`] sets
+    /// only the default [`BiRrt`]'s).
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// use hearth_planning::LazyPrm;
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?.with_planner(LazyPrm::default());
+    /// assert_eq!(planner.planner().roadmap_size(), 0); // grown by the first query, kept for the next
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn with_planner<Q: Planner<JointSpace>>(self, planner: Q) -> MotionPlanner<Q> {
+        MotionPlanner {
+            validity: self.validity,
+            planner,
+            motion: self.motion,
+            plain: self.plain,
+            limits: self.limits,
+            settings: self.settings,
+        }
+    }
+
+    /// The same set-up timed within other limits (e.g. [`Limits::scaled`] for slower motions).
+    ///
+    /// # Errors
+    /// [`PlanError::BadInput`] when the limits have another number of joints than the chain.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm.clone(), SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// use hearth_planning::trajectory::Limits;
+    /// let slow = Limits::for_chain(&arm).scaled(0.5, 0.5).unwrap();
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?.with_limits(slow.clone())?;
+    /// assert_eq!(planner.limits(), &slow);
+    /// let two = Limits::new(vec![1.0; 2], vec![1.0; 2], vec![1.0; 2]).unwrap();
+    /// assert!(planner.with_limits(two).is_err());
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn with_limits(mut self, limits: Limits) -> Result<Self, PlanError> {
+        let dof = self.validity.chain().dof();
+        if limits.velocity().len() != dof {
+            return Err(PlanError::BadInput(format!(
+                "limits for {} joints, the chain has {dof}",
+                limits.velocity().len()
+            )));
+        }
+        self.limits = limits;
+        Ok(self)
+    }
+
+    /// The state validity: to move the robot's base or fixed joints
+    /// ([`RobotValidity::set_reference`]), attach a held object, or explain a contact.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let mut planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// let q = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.785];
+    /// assert!(planner.validity_mut().explain(&q).is_none()); // nothing to touch
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn validity_mut(&mut self) -> &mut RobotValidity {
+        &mut self.validity
+    }
+
+    /// The state validity.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// assert_eq!(planner.validity().chain().dof(), 7);
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn validity(&self) -> &RobotValidity {
+        &self.validity
+    }
+
+    /// The planner.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// assert_eq!(planner.planner().range, Some(0.5)); // the Panda's seven joints, reach weights
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn planner(&self) -> &P {
+        &self.planner
+    }
+
+    /// The planning space (weighted with [`MotionSettings::reach_weights`]).
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity, Space};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// let (a, mut b) = (vec![0.0; 7], vec![0.0; 7]);
+    /// b[6] = 1.0; // the last wrist joint weighs less than a shoulder joint
+    /// assert!(planner.space().distance(&a, &b) < 0.5);
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn space(&self) -> &JointSpace {
+        self.motion.space()
+    }
+
+    /// The limits the motions are timed within.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity};
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// assert_eq!(planner.limits().velocity().len(), 7);
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Plans from `start` to `goal` within `budget` (the planner's; the post-processing has
+    /// [`MotionSettings::smoothing_time`] on top), then shortcuts, times and checks the motion
+    /// at the fine resolution. The same seed gives the same motion, up to the budget's clock
+    /// (give an iteration limit for motions that repeat on any machine).
+    ///
+    /// # Errors
+    /// The planner's: [`PlanError::InvalidStart`] and [`PlanError::InvalidGoals`] naming the
+    /// contact, [`PlanError::BadInput`] (wrong length, NaN, outside the limits, a budget
+    /// without limits), [`PlanError::Timeout`] with statistics; and the post-processing's
+    /// [`PlanError::InvalidMotion`] when no checked motion could be made from the path.
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+    /// # use hearth_planning::{Budget, Goal, ParryScene, PlanError, RobotValidity};
+    /// # use rand::SeedableRng;
+    /// # let panda = RobotModel::builtin("panda").unwrap();
+    /// # let arm = Chain::named(&panda, "arm").unwrap();
+    /// # let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// let mut planner = MotionPlanner::new(validity, MotionSettings::default())?;
+    /// let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+    /// let start = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.785];
+    /// let goal = Goal::Config(vec![1.0, 0.3, 0.0, -1.2, 0.0, 1.5, 0.785]);
+    /// let motion = planner.plan(&start, goal.clone(), &Budget::iterations(1_000), &mut rng)?;
+    /// assert!(motion.trajectory.duration() > 0.0);
+    /// let nan = [f64::NAN; 7];
+    /// assert!(matches!(planner.plan(&nan, goal, &Budget::iterations(1_000), &mut rng), Err(PlanError::BadInput(_))));
+    /// # Ok::<(), PlanError>(())
+    /// ```
+    pub fn plan<R: Rng + ?Sized>(
+        &mut self,
+        start: &[f64],
+        goal: Goal,
+        budget: &Budget,
+        rng: &mut R,
+    ) -> Result<PlannedMotion, PlanError> {
+        let request = PlanRequest::new(start.to_vec(), goal);
+        let validity = &mut self.validity;
+        let solution = self
+            .planner
+            .plan(&mut self.motion, validity, &request, budget, rng)
+            .map_err(|e| e.explain_with(&request, |q| validity.explain(q).map(|c| c.to_string())))?;
+        let fine = self.settings.fine_resolution;
+        let settings = ShortcutSettings {
+            attempts: self.settings.shortcut_attempts,
+            time_limit: None,
+            // Ramps are checked at the final check's spacing, and the returned motion passes
+            // that check.
+            fine_resolution: Some(fine),
+            verify_resolution: Some(fine),
+        };
+        let t0 = Instant::now();
+        let smoothed = smooth(
+            self.settings.smoothing,
+            &mut self.plain,
+            validity,
+            &solution.path,
+            &self.limits,
+            &settings,
+            self.settings.smoothing_time,
+            rng,
+        )?;
+        Ok(PlannedMotion {
+            trajectory: smoothed.trajectory,
+            path: smoothed.path,
+            planned: solution.path,
+            stats: solution.stats,
+            smoothing_time: t0.elapsed(),
+            repaired: smoothed.repaired,
+        })
+    }
+}
