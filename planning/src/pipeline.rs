@@ -43,8 +43,8 @@ pub struct MotionSettings {
     /// `docs/planning-log.md`). Smoothing, timing and the final check are unweighted either way.
     pub reach_weights: bool,
     /// The default planner's longest step, in the planning metric. `None`: with the reach
-    /// weights 0.5 for a chain of up to seven joints and 0.4 for a longer one (the Panda's and
-    /// the Fetch's benchmark settings), without them [`BiRrt`]'s own default.
+    /// weights [`reach_step`] (the Panda's and the Fetch's benchmark steps), without them
+    /// [`BiRrt`]'s own default.
     pub range: Option<f64>,
     /// Spacing of the planner's edge checks, in the planning metric.
     pub resolution: f64,
@@ -72,6 +72,19 @@ impl Default for MotionSettings {
             smoothing_time: Duration::from_secs(1),
         }
     }
+}
+
+/// BiRRT's step in the joints' reach metric for a chain of `dof` joints: 0.5 up to seven
+/// joints, 0.4 for more. Measured on MotionBenchMaker (fiftieth round of
+/// `docs/planning-log.md`): the Panda's seven joints planned fastest with 0.5, the Fetch's
+/// torso and arm (eight) with 0.4; `hearth bench plan` takes the same.
+///
+/// ```
+/// use hearth_planning::pipeline::reach_step;
+/// assert_eq!((reach_step(7), reach_step(8)), (0.5, 0.4));
+/// ```
+pub fn reach_step(dof: usize) -> f64 {
+    if dof <= 7 { 0.5 } else { 0.4 }
 }
 
 /// A timed, checked motion from [`MotionPlanner::plan`].
@@ -206,7 +219,7 @@ impl MotionPlanner<BiRrt> {
         let dof = validity.chain().dof();
         let range = settings
             .range
-            .or_else(|| settings.reach_weights.then_some(if dof <= 7 { 0.5 } else { 0.4 }));
+            .or_else(|| settings.reach_weights.then(|| reach_step(dof)));
         Ok(Self {
             limits: Limits::for_chain(validity.chain()),
             planner: BiRrt::with_range(range),

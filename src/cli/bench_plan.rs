@@ -11,6 +11,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
 use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
+use hearth_planning::pipeline::reach_step;
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
@@ -248,15 +249,14 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
 /// without weights, the Fetch's torso + arm problems are solved more often with a 1.2 rad step
 /// than with the planner's 0.26 rad default (94.0 % against 82.8 % in 1 s) and the Panda's
 /// fastest with 0.65 rad; with the joints' reach as weights (the default), 0.4 and 0.5 rad
-/// (fiftieth round). Both take the planner's connection, [`Connect::Other`]: with
+/// (fiftieth round; [`reach_step`] of their eight and seven joints). Both take the planner's connection, [`Connect::Other`]: with
 /// [`Connect::Onward`] the Fetch's hardest problems were solved in 54 of 176 plans against 74,
 /// and the Panda's open ones were slower. Other robots take the planner's defaults.
-fn birrt_for(robot: &str, a: &BenchPlanArgs) -> BiRrt {
+fn birrt_for(robot: &str, dof: usize, a: &BenchPlanArgs) -> BiRrt {
     let default_range = match (robot, weighted(a)) {
         ("fetch", false) => Some(1.2),
-        ("fetch", true) => Some(0.4),
         ("panda", false) => Some(0.65),
-        ("panda", true) => Some(0.5),
+        ("fetch" | "panda", true) => Some(reach_step(dof)),
         _ => None,
     };
     BiRrt {
@@ -626,7 +626,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             }
             let step = match a.planner {
                 PlannerKind::Birrt => {
-                    let birrt = birrt_for(&set.robot, &a);
+                    let birrt = birrt_for(&set.robot, set.joint_names.len(), &a);
                     let range = step_text(birrt.range);
                     let connect = match birrt.connect {
                         Connect::Other => "other",
@@ -694,7 +694,10 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             }
             _ => (rs.space.clone(), Vec::new()),
         };
-        let (birrt, rrt) = (birrt_for(&set.robot, &a), rrt_for(&set.robot, a.range, a.goal_zone));
+        let (birrt, rrt) = (
+            birrt_for(&set.robot, set.joint_names.len(), &a),
+            rrt_for(&set.robot, a.range, a.goal_zone),
+        );
         for problem in &set.problems {
             for rep in 0..a.repeat {
                 done += 1;
