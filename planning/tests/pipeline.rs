@@ -14,6 +14,7 @@ use hearth_planning::trajectory::Limits;
 use hearth_planning::validity::StateValidator;
 use hearth_planning::{Budget, Goal, LazyPrm, PlanError, RobotValidity, Rrt};
 use parry3d::math::{Pose, Vector};
+use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
@@ -391,5 +392,51 @@ fn motionbenchmaker_problems_of_both_robots() {
             &p.start,
             &goals,
         );
+    }
+}
+
+/// Any number, including the awkward ones.
+fn number() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(f64::NAN),
+        Just(f64::INFINITY),
+        Just(-1.0),
+        Just(0.0),
+        Just(1e-300),
+        Just(1e300),
+        1e-9..10.0f64,
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Settings from anywhere (a TOML file, a user's struct literal) give a planner or a typed
+    /// error, never a panic; a planner built from them has the settings' resolution.
+    #[test]
+    fn any_settings_give_a_planner_or_bad_input(
+        resolution in number(),
+        fine in number(),
+        range in prop::option::of(number()),
+        reach_weights in any::<bool>(),
+        millis in 0u64..2_000,
+    ) {
+        let settings = MotionSettings {
+            reach_weights,
+            range,
+            resolution,
+            fine_resolution: fine,
+            smoothing_time: Duration::from_millis(millis),
+            ..Default::default()
+        };
+        match MotionPlanner::new(table_validity(), settings) {
+            Ok(p) => {
+                prop_assert!(resolution.is_finite() && resolution > 0.0 && fine > 0.0 && fine <= resolution);
+                prop_assert!(millis > 0 && range.is_none_or(|r| r.is_finite() && r > 0.0));
+                prop_assert!(p.planner().range.is_none_or(|r| r > 0.0));
+            }
+            Err(PlanError::BadInput(msg)) => prop_assert!(!msg.is_empty()),
+            Err(e) => prop_assert!(false, "not BadInput: {e}"),
+        }
     }
 }
