@@ -183,7 +183,8 @@ impl MotionPlanner<BiRrt> {
     /// use hearth_planning::{ParryScene, RobotValidity};
     /// # let panda = RobotModel::builtin("panda").unwrap();
     /// # let arm = Chain::named(&panda, "arm").unwrap();
-    /// let validity = RobotValidity::new(arm, SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() }), Arc::new(ParryScene::new(vec![])));
+    /// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    /// let validity = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
     /// assert!(MotionPlanner::new(validity.clone(), MotionSettings::default()).is_ok());
     /// let coarse = MotionSettings { fine_resolution: 0.1, ..Default::default() };
     /// assert!(MotionPlanner::new(validity, coarse).unwrap_err().to_string().contains("fine resolution"));

@@ -249,9 +249,10 @@ fn parse_selectors(only: &[String]) -> anyhow::Result<Vec<(String, Option<u32>)>
 /// without weights, the Fetch's torso + arm problems are solved more often with a 1.2 rad step
 /// than with the planner's 0.26 rad default (94.0 % against 82.8 % in 1 s) and the Panda's
 /// fastest with 0.65 rad; with the joints' reach as weights (the default), 0.4 and 0.5 rad
-/// (fiftieth round; [`reach_step`] of their eight and seven joints). Both take the planner's connection, [`Connect::Other`]: with
-/// [`Connect::Onward`] the Fetch's hardest problems were solved in 54 of 176 plans against 74,
-/// and the Panda's open ones were slower. Other robots take the planner's defaults.
+/// (fiftieth round; [`reach_step`] of their eight and seven joints). Both take the planner's
+/// connection, [`Connect::Other`]: with [`Connect::Onward`] the Fetch's hardest problems were
+/// solved in 54 of 176 plans against 74, and the Panda's open ones were slower. Other robots
+/// take the planner's defaults.
 fn birrt_for(robot: &str, dof: usize, a: &BenchPlanArgs) -> BiRrt {
     let default_range = match (robot, weighted(a)) {
         ("fetch", false) => Some(1.2),
