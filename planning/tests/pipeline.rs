@@ -148,68 +148,32 @@ fn table_motion_in_either_metric_with_every_planner() {
         reach_weights: false,
         ..Default::default()
     };
-    let planner = MotionPlanner::new(table_validity(), settings).unwrap();
+    let mut unweighted = MotionPlanner::new(table_validity(), settings).unwrap();
     // Without the weights the default BiRRT keeps its own step.
-    assert_eq!(planner.planner().range, None);
+    assert_eq!(unweighted.planner().range, None);
+    let limits = unweighted.limits().clone();
     let mut rng = Pcg64Mcg::seed_from_u64(5);
-    let limits = planner.limits().clone();
-    let mut planner = planner;
-    let m = planner
-        .plan(&START, Goal::Config(GOAL.to_vec()), &budget(), &mut rng)
-        .unwrap();
-    assert_motion(
-        "table/unweighted",
-        &m,
-        &mut table_validity(),
-        &limits,
-        &START,
-        &[GOAL.to_vec()],
-    );
+    let to = |q: [f64; 7]| Goal::Config(q.to_vec());
+    let check = |label: &str, m: &PlannedMotion, from: [f64; 7], goal: [f64; 7]| {
+        assert_motion(label, m, &mut table_validity(), &limits, &from, &[goal.to_vec()]);
+    };
+    let m = unweighted.plan(&START, to(GOAL), &budget(), &mut rng).unwrap();
+    check("table/unweighted", &m, START, GOAL);
 
-    let mut rrt = MotionPlanner::new(table_validity(), MotionSettings::default())
-        .unwrap()
-        .with_planner(Rrt::default());
-    let m = rrt
-        .plan(&START, Goal::Config(GOAL.to_vec()), &budget(), &mut rng)
-        .unwrap();
-    assert_motion(
-        "table/rrt",
-        &m,
-        &mut table_validity(),
-        &limits,
-        &START,
-        &[GOAL.to_vec()],
-    );
+    let defaults = || MotionPlanner::new(table_validity(), MotionSettings::default()).unwrap();
+    let mut rrt = defaults().with_planner(Rrt::default());
+    let m = rrt.plan(&START, to(GOAL), &budget(), &mut rng).unwrap();
+    check("table/rrt", &m, START, GOAL);
 
     // LazyPRM keeps its roadmap between queries in the same scene.
-    let mut prm = MotionPlanner::new(table_validity(), MotionSettings::default())
-        .unwrap()
-        .with_planner(LazyPrm::default());
-    let first = prm
-        .plan(&START, Goal::Config(GOAL.to_vec()), &budget(), &mut rng)
-        .unwrap();
+    let mut prm = defaults().with_planner(LazyPrm::default());
+    let there = prm.plan(&START, to(GOAL), &budget(), &mut rng).unwrap();
     let grown = prm.planner().roadmap_size();
     assert!(grown > 0);
-    let back = prm
-        .plan(&GOAL, Goal::Config(START.to_vec()), &budget(), &mut rng)
-        .unwrap();
+    let back = prm.plan(&GOAL, to(START), &budget(), &mut rng).unwrap();
     assert!(prm.planner().roadmap_size() >= grown);
-    assert_motion(
-        "table/lazyprm",
-        &first,
-        &mut table_validity(),
-        &limits,
-        &START,
-        &[GOAL.to_vec()],
-    );
-    assert_motion(
-        "table/lazyprm back",
-        &back,
-        &mut table_validity(),
-        &limits,
-        &GOAL,
-        &[START.to_vec()],
-    );
+    check("table/lazyprm", &there, START, GOAL);
+    check("table/lazyprm back", &back, GOAL, START);
 }
 
 #[test]
