@@ -10,6 +10,7 @@
 //! call. Every part stays reachable for what the defaults do not cover (another planner, other
 //! limits, objects attached to the gripper).
 
+use std::any::Any;
 use std::time::{Duration, Instant};
 
 use rand::Rng;
@@ -87,6 +88,24 @@ pub fn reach_step(dof: usize) -> f64 {
     if dof <= 7 { 0.5 } else { 0.4 }
 }
 
+/// The weight schedule `hearth bench plan` gives the Fetch's BiRRT
+/// ([`MotionPlanner::with_weight_schedule`]): the reach weights squared from the start, as
+/// they are from iteration 160,000 (about 0.2 s on the 2-vCPU benchmark machine), their square
+/// roots from 360,000. The squared weights planned the Fetch's cage and open problems fastest,
+/// the square roots its wedged bookshelf goals more often; the schedule took 15 % off the
+/// Fetch's median planning times (fifty-first round of `docs/planning-log.md`). The Panda
+/// plans its cage more slowly with the squared weights, so it keeps one metric.
+///
+/// ```
+/// let s = hearth_planning::pipeline::FETCH_WEIGHT_SCHEDULE;
+/// assert_eq!(s[0], (0, 2.0));
+/// assert!(s.windows(2).all(|w| w[0].0 < w[1].0));
+/// ```
+pub const FETCH_WEIGHT_SCHEDULE: [(u64, f64); 3] = [(0, 2.0), (160_000, 1.0), (360_000, 0.5)];
+
+/// The largest power of the reach weights a schedule may take.
+const MAX_POWER: f64 = 4.0;
+
 /// A timed, checked motion from [`MotionPlanner::plan`].
 #[derive(Clone, Debug)]
 pub struct PlannedMotion {
@@ -160,6 +179,10 @@ pub struct MotionPlanner<P = BiRrt> {
     plain: MotionValidator<JointSpace>,
     limits: Limits,
     settings: MotionSettings,
+    /// The joints' reach weights (with [`MotionSettings::reach_weights`]).
+    reach: Option<Vec<f64>>,
+    /// BiRRT's later metrics: from an iteration on, the planning space with other weights.
+    schedule: Vec<(u64, JointSpace)>,
 }
 
 impl<P: std::fmt::Debug> std::fmt::Debug for MotionPlanner<P> {
@@ -196,13 +219,10 @@ impl MotionPlanner<BiRrt> {
     /// ```
     pub fn new(validity: RobotValidity, settings: MotionSettings) -> Result<Self, PlanError> {
         let plain = JointSpace::from_chain(validity.chain()).map_err(|e| PlanError::BadInput(e.to_string()))?;
-        let space = if settings.reach_weights {
-            plain
-                .clone()
-                .with_weights(&validity.joint_weights())
-                .map_err(|e| PlanError::BadInput(e.to_string()))?
-        } else {
-            plain.clone()
+        let reach = settings.reach_weights.then(|| validity.joint_weights());
+        let space = match &reach {
+            Some(w) => weighted(&plain, w, 1.0)?,
+            None => plain.clone(),
         };
         let motion = MotionValidator::try_new(space, settings.resolution)?;
         let fine = checked_resolution(&plain, "fine resolution", settings.fine_resolution)?;
@@ -233,11 +253,91 @@ impl MotionPlanner<BiRrt> {
             motion,
             validity,
             settings,
+            reach,
+            schedule: Vec::new(),
         })
+    }
+
+    /// The same planner changing its metric part-way through each plan
+    /// ([`BiRrt::plan_with_metrics`]; the trees are kept): `steps` are (iteration, power)
+    /// pairs, each planning in the joints' reach weights raised to `power` from `iteration`
+    /// on, the first from iteration 0. [`FETCH_WEIGHT_SCHEDULE`] is the benchmark's for the
+    /// Fetch. Iterations rather than seconds keep a seed's plan the same on any machine.
+    /// [`with_planner`](MotionPlanner::with_planner) drops the schedule: set it after
+    /// choosing the BiRRT.
+    ///
+    /// # Errors
+    /// [`PlanError::BadInput`] without [`MotionSettings::reach_weights`], for no steps, a
+    /// first step after iteration 0, iterations that do not increase, or a power outside
+    /// 0–4 (0 plans unweighted).
+    ///
+    /// ```
+    /// # use std::sync::Arc;
+    /// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+    /// # use hearth_planning::{ParryScene, RobotValidity, Space};
+    /// # let fetch = RobotModel::builtin("fetch").unwrap();
+    /// # let arm = Chain::named(&fetch, "arm_with_torso").unwrap();
+    /// # let acm = SelfCollisionMatrix::compute(&fetch, &SelfCollisionSettings { samples: 300, ..Default::default() });
+    /// use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, MotionPlanner, MotionSettings};
+    /// let validity = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
+    /// let planner = MotionPlanner::new(validity.clone(), MotionSettings::default())?;
+    /// let scheduled = MotionPlanner::new(validity, MotionSettings::default())?
+    ///     .with_weight_schedule(&FETCH_WEIGHT_SCHEDULE)?;
+    /// // The plans start in the squared weights: a wrist's turn counts for less.
+    /// let (a, mut b) = (vec![0.0; 8], vec![0.0; 8]);
+    /// b[7] = 1.0; // wrist_roll_joint
+    /// assert!(scheduled.space().distance(&a, &b) < planner.space().distance(&a, &b));
+    /// assert!(scheduled.with_weight_schedule(&[(5, 1.0)]).is_err()); // not from iteration 0
+    /// # Ok::<(), hearth_planning::PlanError>(())
+    /// ```
+    pub fn with_weight_schedule(mut self, steps: &[(u64, f64)]) -> Result<Self, PlanError> {
+        let Some(reach) = &self.reach else {
+            return Err(PlanError::BadInput(
+                "a weight schedule needs the reach weights (MotionSettings::reach_weights)".into(),
+            ));
+        };
+        match steps.first() {
+            None => return Err(PlanError::BadInput("a weight schedule needs at least one step".into())),
+            Some(&(at, _)) if at != 0 => {
+                return Err(PlanError::BadInput(format!(
+                    "a weight schedule's first step applies from iteration 0, not {at}"
+                )));
+            }
+            Some(_) => {}
+        }
+        if let Some(w) = steps.windows(2).find(|w| w[1].0 <= w[0].0) {
+            return Err(PlanError::BadInput(format!(
+                "a weight schedule's iterations must increase ({} after {})",
+                w[1].0, w[0].0
+            )));
+        }
+        let plain = self.plain.space();
+        let mut spaces = steps
+            .iter()
+            .map(|&(at, power)| weighted(plain, reach, power).map(|s| (at, s)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let (_, mut first) = spaces.remove(0);
+        self.motion.swap_space(&mut first);
+        self.schedule = spaces;
+        Ok(self)
     }
 }
 
-impl<P: Planner<JointSpace>> MotionPlanner<P> {
+/// `plain` with the distance weights `reach` raised to `power` (0 to 4).
+fn weighted(plain: &JointSpace, reach: &[f64], power: f64) -> Result<JointSpace, PlanError> {
+    if !(0.0..=MAX_POWER).contains(&power) {
+        return Err(PlanError::BadInput(format!(
+            "a power of the reach weights must be between 0 and {MAX_POWER}, not {power}"
+        )));
+    }
+    let w: Vec<f64> = reach.iter().map(|w| w.powf(power)).collect();
+    plain
+        .clone()
+        .with_weights(&w)
+        .map_err(|e| PlanError::BadInput(e.to_string()))
+}
+
+impl<P: Planner<JointSpace> + 'static> MotionPlanner<P> {
     /// The same set-up with another planner (its own step: [`MotionSettings::range`] sets
     /// only the default [`BiRrt`]'s).
     ///
@@ -254,14 +354,24 @@ impl<P: Planner<JointSpace>> MotionPlanner<P> {
     /// assert_eq!(planner.planner().roadmap_size(), 0); // grown by the first query, kept for the next
     /// # Ok::<(), hearth_planning::PlanError>(())
     /// ```
-    pub fn with_planner<Q: Planner<JointSpace>>(self, planner: Q) -> MotionPlanner<Q> {
+    pub fn with_planner<Q: Planner<JointSpace> + 'static>(self, planner: Q) -> MotionPlanner<Q> {
+        let mut motion = self.motion;
+        // A schedule's first metric back out: the new planner plans in the settings' metric.
+        if !self.schedule.is_empty()
+            && let Some(reach) = &self.reach
+            && let Ok(mut space) = weighted(self.plain.space(), reach, 1.0)
+        {
+            motion.swap_space(&mut space);
+        }
         MotionPlanner {
             validity: self.validity,
             planner,
-            motion: self.motion,
+            motion,
             plain: self.plain,
             limits: self.limits,
             settings: self.settings,
+            reach: self.reach,
+            schedule: Vec::new(),
         }
     }
 
@@ -354,7 +464,8 @@ impl<P: Planner<JointSpace>> MotionPlanner<P> {
         &self.planner
     }
 
-    /// The planning space (weighted with [`MotionSettings::reach_weights`]).
+    /// The planning space a plan starts in (weighted with [`MotionSettings::reach_weights`],
+    /// by a schedule's first power with [`with_weight_schedule`](MotionPlanner::with_weight_schedule)).
     ///
     /// ```
     /// # use std::sync::Arc;
@@ -431,10 +542,14 @@ impl<P: Planner<JointSpace>> MotionPlanner<P> {
     ) -> Result<PlannedMotion, PlanError> {
         let request = PlanRequest::new(start.to_vec(), goal);
         let validity = &mut self.validity;
-        let solution = self
-            .planner
-            .plan(&mut self.motion, validity, &request, budget, rng)
-            .map_err(|e| e.explain_with(&request, |q| validity.explain(q).map(|c| c.to_string())))?;
+        let planned = match (&mut self.planner as &mut dyn Any).downcast_mut::<BiRrt>() {
+            // (Only a BiRRT planner gets a schedule.)
+            Some(birrt) if !self.schedule.is_empty() => {
+                birrt.plan_with_metrics(&mut self.motion, validity, &request, budget, rng, &mut self.schedule)
+            }
+            _ => self.planner.plan(&mut self.motion, validity, &request, budget, rng),
+        };
+        let solution = planned.map_err(|e| e.explain_with(&request, |q| validity.explain(q).map(|c| c.to_string())))?;
         let fine = self.settings.fine_resolution;
         let settings = ShortcutSettings {
             attempts: self.settings.shortcut_attempts,

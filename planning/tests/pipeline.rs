@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
 use hearth_planning::obstacles::{Obstacle, ParryScene};
-use hearth_planning::pipeline::{MotionPlanner, MotionSettings, PlannedMotion};
+use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, MotionPlanner, MotionSettings, PlannedMotion};
 use hearth_planning::problem::ProblemSet;
 use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::Limits;
@@ -298,7 +298,8 @@ fn bad_settings_are_typed_errors() {
 /// The tests' MotionBenchMaker excerpts with the default settings: the Panda's table_pick
 /// problem, and the Fetch's, whose goal our model refuses (torso against shoulder, a pair the
 /// problem set does not allow), so the Fetch plans from that start to a valid configuration drawn
-/// at random instead. Fingers as the problem sets hold them, clamped to the models.
+/// at random instead; the Fetch with the benchmark's weight schedule. Fingers as the problem
+/// sets hold them, clamped to the models.
 #[test]
 fn motionbenchmaker_problems_of_both_robots() {
     let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
@@ -320,6 +321,10 @@ fn motionbenchmaker_problems_of_both_robots() {
             v
         };
         let mut planner = MotionPlanner::new(validity(), MotionSettings::default()).unwrap();
+        if robot == "fetch" {
+            // As the benchmark plans the Fetch.
+            planner = planner.with_weight_schedule(&FETCH_WEIGHT_SCHEDULE).unwrap();
+        }
         let limits = planner.limits().clone();
         let mut rng = Pcg64Mcg::seed_from_u64(u64::from(p.id));
         let goals = match robot {
@@ -403,4 +408,89 @@ proptest! {
             Err(e) => prop_assert!(false, "not BadInput: {e}"),
         }
     }
+}
+
+/// A BiRRT that changes its metric part-way: the plan is the same for a seed, checked, and
+/// another than in one metric; the plan leaves the starting metric in place.
+#[test]
+fn table_motion_with_a_weight_schedule() {
+    let steps = [(0, 2.0), (3, 1.0), (6, 0.5)];
+    let scheduled = || {
+        MotionPlanner::new(table_validity(), MotionSettings::default())
+            .unwrap()
+            .with_weight_schedule(&steps)
+            .unwrap()
+    };
+    let mut planner = scheduled();
+    let first_metric = planner.space().clone();
+    let limits = planner.limits().clone();
+    let plan = |p: &mut MotionPlanner| {
+        p.plan(
+            &START,
+            Goal::Config(GOAL.to_vec()),
+            &budget(),
+            &mut Pcg64Mcg::seed_from_u64(2),
+        )
+        .unwrap()
+    };
+    let m = plan(&mut planner);
+    assert!(
+        m.stats.iterations > 6,
+        "the schedule's last metric was reached: {:?}",
+        m.stats
+    );
+    assert_motion(
+        "table/schedule",
+        &m,
+        &mut table_validity(),
+        &limits,
+        &START,
+        &[GOAL.to_vec()],
+    );
+    assert_eq!(planner.space(), &first_metric, "the starting metric is back in place");
+    assert_eq!(
+        plan(&mut planner).planned.states,
+        m.planned.states,
+        "same seed, same plan"
+    );
+    assert_eq!(
+        plan(&mut scheduled()).planned.states,
+        m.planned.states,
+        "a fresh planner too"
+    );
+    let mut one_metric = MotionPlanner::new(table_validity(), MotionSettings::default()).unwrap();
+    assert_ne!(plan(&mut one_metric).planned.states, m.planned.states);
+    assert_ne!(one_metric.space(), &first_metric);
+    // Another planner plans in the settings' metric again.
+    let rrt = scheduled().with_planner(Rrt::default());
+    assert_eq!(rrt.space(), one_metric.space());
+}
+
+#[test]
+fn bad_weight_schedules_are_typed_errors() {
+    let defaults = || MotionPlanner::new(table_validity(), MotionSettings::default()).unwrap();
+    let cases: [(&str, &[(u64, f64)]); 6] = [
+        ("no steps", &[]),
+        ("first after 0", &[(10, 1.0)]),
+        ("iterations not increasing", &[(0, 2.0), (100, 1.0), (100, 0.5)]),
+        ("power 5", &[(0, 5.0)]),
+        ("negative power", &[(0, 1.0), (10, -1.0)]),
+        ("NaN power", &[(0, f64::NAN)]),
+    ];
+    for (label, steps) in cases {
+        match defaults().with_weight_schedule(steps) {
+            Err(PlanError::BadInput(msg)) => println!("{label}: {msg}"),
+            Err(e) => panic!("{label}: {e}"),
+            Ok(_) => panic!("{label}: accepted"),
+        }
+    }
+    let unweighted = MotionSettings {
+        reach_weights: false,
+        ..Default::default()
+    };
+    let e = MotionPlanner::new(table_validity(), unweighted)
+        .unwrap()
+        .with_weight_schedule(&FETCH_WEIGHT_SCHEDULE)
+        .unwrap_err();
+    assert!(e.to_string().contains("reach weights"), "{e}");
 }

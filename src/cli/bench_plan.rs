@@ -11,7 +11,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
 use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
-use hearth_planning::pipeline::reach_step;
+use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, reach_step};
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
@@ -279,22 +279,17 @@ fn weighted(a: &BenchPlanArgs) -> bool {
     a.weights != Some(WeightsArg::None)
 }
 
-/// The Fetch's BiRRT weight schedule when none is given: the reach weights squared, then as
-/// they are from iteration 160,000 (about 0.2 s on the 2-vCPU benchmark machine), then their
-/// square roots from 360,000. The squared weights plan the Fetch's cage and open problems
-/// fastest, the square roots its wedged bookshelf goals more often (fifty-first round).
-const FETCH_SCHEDULE: &str = "2,1@160000,0.5@360000";
-
-/// BiRRT's weight schedule (`--weight-schedule`; by default [`FETCH_SCHEDULE`] for the Fetch
-/// and none for other robots), or `None` to plan in one metric throughout. Only BiRRT with the
-/// reach weights on one thread takes one.
+/// BiRRT's weight schedule (`--weight-schedule`; by default [`FETCH_WEIGHT_SCHEDULE`], the
+/// reach weights squared, as they are from iteration 160,000 and their square roots from
+/// 360,000, for the Fetch and none for other robots), or `None` to plan in one metric
+/// throughout. Only BiRRT with the reach weights on one thread takes one.
 fn schedule_for(robot: &str, a: &BenchPlanArgs) -> Option<WeightSchedule> {
     if a.planner != PlannerKind::Birrt || !weighted(a) || a.threads > 1 {
         return None;
     }
     match (&a.weight_schedule, robot) {
         (Some(s), _) => Some(s.clone()),
-        (None, "fetch") => Some(FETCH_SCHEDULE.parse().expect("the default schedule parses")),
+        (None, "fetch") => Some(WeightSchedule(FETCH_WEIGHT_SCHEDULE.to_vec())),
         (None, _) => None,
     }
 }

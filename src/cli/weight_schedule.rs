@@ -90,6 +90,8 @@ mod tests {
     fn parses_and_prints() {
         let s: WeightSchedule = "2, 1@160000,0.5@360000".parse().unwrap();
         assert_eq!(s.0, vec![(0, 2.0), (160_000, 1.0), (360_000, 0.5)]);
+        // The Fetch's default, as `--help` writes it.
+        assert_eq!(s.0, hearth_planning::pipeline::FETCH_WEIGHT_SCHEDULE);
         assert_eq!(s.to_string(), "2, 1 from iteration 160000, 0.5 from iteration 360000");
         let w = s.spaces(&[1.0, 0.25]);
         assert_eq!(w[0].1, vec![1.0, 0.0625]);
