@@ -107,6 +107,32 @@ pub const FETCH_WEIGHT_SCHEDULE: [(u64, f64); 3] = [(0, 2.0), (160_000, 1.0), (3
 const MAX_POWER: f64 = 4.0;
 
 /// A timed, checked motion from [`MotionPlanner::plan`].
+///
+/// ```
+/// # use std::sync::Arc;
+/// # use hearth_planning::kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+/// # use hearth_planning::pipeline::{MotionPlanner, MotionSettings};
+/// # use hearth_planning::{Budget, Goal, ParryScene, RobotValidity};
+/// # use rand::SeedableRng;
+/// # let panda = RobotModel::builtin("panda").unwrap();
+/// # let arm = Chain::named(&panda, "arm").unwrap();
+/// # let acm = SelfCollisionMatrix::compute(&panda, &SelfCollisionSettings { samples: 300, ..Default::default() });
+/// # let validity = RobotValidity::new(arm, acm, Arc::new(ParryScene::new(vec![])));
+/// # let mut planner = MotionPlanner::new(validity, MotionSettings::default())?;
+/// # let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(1);
+/// let start = [0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.785];
+/// let goal = Goal::Config(vec![1.0, 0.3, 0.0, -1.2, 0.0, 1.5, 0.785]);
+/// let motion = planner.plan(&start, goal, &Budget::iterations(1_000), &mut rng)?;
+/// // The planner's path, then the shortcut and timed motion, sampled at 100 Hz.
+/// assert_eq!(motion.planned.states[0], start);
+/// let (mut q, mut v) = ([0.0; 7], [0.0; 7]);
+/// for k in 0..=(motion.trajectory.duration() * 100.0) as usize {
+///     motion.trajectory.sample(k as f64 / 100.0, &mut q, Some(&mut v));
+/// }
+/// assert!(motion.stats.states_checked > 0); // nothing in the way: no edge to repair
+/// assert_eq!(motion.repaired, 0);
+/// # Ok::<(), hearth_planning::PlanError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct PlannedMotion {
     /// The motion in time, within the planner's [`Limits`]: sample positions, velocities and
