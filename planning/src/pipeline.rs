@@ -103,8 +103,13 @@ pub fn reach_step(dof: usize) -> f64 {
 /// ```
 pub const FETCH_WEIGHT_SCHEDULE: [(u64, f64); 3] = [(0, 2.0), (160_000, 1.0), (360_000, 0.5)];
 
-/// The largest power of the reach weights a schedule may take.
-const MAX_POWER: f64 = 4.0;
+/// The largest power of the reach weights a weight schedule may take: the Fetch's lightest
+/// joint (0.25) weighs 0.004 at the fourth power, its edges checked every 8 rad of it.
+///
+/// ```
+/// assert_eq!(hearth_planning::pipeline::MAX_WEIGHT_POWER, 4.0);
+/// ```
+pub const MAX_WEIGHT_POWER: f64 = 4.0;
 
 /// A timed, checked motion from [`MotionPlanner::plan`].
 ///
@@ -322,38 +327,66 @@ impl MotionPlanner<BiRrt> {
                 "a weight schedule needs the reach weights (MotionSettings::reach_weights)".into(),
             ));
         };
-        match steps.first() {
-            None => return Err(PlanError::BadInput("a weight schedule needs at least one step".into())),
-            Some(&(at, _)) if at != 0 => {
-                return Err(PlanError::BadInput(format!(
-                    "a weight schedule's first step applies from iteration 0, not {at}"
-                )));
-            }
-            Some(_) => {}
-        }
-        if let Some(w) = steps.windows(2).find(|w| w[1].0 <= w[0].0) {
-            return Err(PlanError::BadInput(format!(
-                "a weight schedule's iterations must increase ({} after {})",
-                w[1].0, w[0].0
-            )));
-        }
-        let plain = self.plain.space();
-        let mut spaces = steps
-            .iter()
-            .map(|&(at, power)| weighted(plain, reach, power).map(|s| (at, s)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let (_, mut first) = spaces.remove(0);
+        let (mut first, later) = schedule_spaces(self.plain.space(), reach, steps)?;
         self.motion.swap_space(&mut first);
-        self.schedule = spaces;
+        self.schedule = later;
         Ok(self)
     }
 }
 
+/// The spaces of a weight schedule for [`BiRrt::plan_with_metrics`]: `steps` are (iteration,
+/// power) pairs, each meaning `plain` with the distance weights `reach` raised to `power` from
+/// that iteration on. Returns the first step's space, where a plan starts, and the later
+/// steps' spaces with their iterations.
+///
+/// # Errors
+/// [`PlanError::BadInput`] for no steps, a first step after iteration 0, iterations that do
+/// not increase, a power outside 0–[`MAX_WEIGHT_POWER`], or weights of another length than
+/// the space.
+///
+/// ```
+/// use hearth_planning::pipeline::schedule_spaces;
+/// use hearth_planning::space::{JointSpace, Space};
+/// let plain = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2])?;
+/// let (first, later) = schedule_spaces(&plain, &[1.0, 0.25], &[(0, 2.0), (100, 0.5)])?;
+/// assert_eq!(first.euclidean_weights(), Some(&[1.0, 0.0625][..]));
+/// assert_eq!((later[0].0, later[0].1.euclidean_weights()), (100, Some(&[1.0, 0.5][..])));
+/// assert!(schedule_spaces(&plain, &[1.0, 0.25], &[(0, 2.0), (0, 1.0)]).is_err());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn schedule_spaces(
+    plain: &JointSpace,
+    reach: &[f64],
+    steps: &[(u64, f64)],
+) -> Result<(JointSpace, Vec<(u64, JointSpace)>), PlanError> {
+    match steps.first() {
+        None => return Err(PlanError::BadInput("a weight schedule needs at least one step".into())),
+        Some(&(at, _)) if at != 0 => {
+            return Err(PlanError::BadInput(format!(
+                "a weight schedule's first step applies from iteration 0, not {at}"
+            )));
+        }
+        Some(_) => {}
+    }
+    if let Some(w) = steps.windows(2).find(|w| w[1].0 <= w[0].0) {
+        return Err(PlanError::BadInput(format!(
+            "a weight schedule's iterations must increase ({} after {})",
+            w[1].0, w[0].0
+        )));
+    }
+    let mut spaces = steps
+        .iter()
+        .map(|&(at, power)| weighted(plain, reach, power).map(|s| (at, s)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (_, first) = spaces.remove(0);
+    Ok((first, spaces))
+}
+
 /// `plain` with the distance weights `reach` raised to `power` (0 to 4).
 fn weighted(plain: &JointSpace, reach: &[f64], power: f64) -> Result<JointSpace, PlanError> {
-    if !(0.0..=MAX_POWER).contains(&power) {
+    if !(0.0..=MAX_WEIGHT_POWER).contains(&power) {
         return Err(PlanError::BadInput(format!(
-            "a power of the reach weights must be between 0 and {MAX_POWER}, not {power}"
+            "a power of the reach weights must be between 0 and {MAX_WEIGHT_POWER}, not {power}"
         )));
     }
     let w: Vec<f64> = reach.iter().map(|w| w.powf(power)).collect();

@@ -11,7 +11,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hearth_kinematics::{Chain, DisabledReason, RobotModel, SelfCollisionMatrix, SelfCollisionSettings, wrap_angle};
 use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
-use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, reach_step};
+use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, reach_step, schedule_spaces};
 use hearth_planning::problem::{JointsInfo, ProblemSet, load_dir};
 use hearth_planning::shortcut::{ShortcutSettings, Smoothing, smooth};
 use hearth_planning::space::{JointSpace, Space};
@@ -678,16 +678,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         let rs = &setups[&set.robot];
         // The planning space, and the spaces a weight schedule switches to (BiRRT only).
         let (space, mut later) = match (&rs.reach, schedule_for(&set.robot, &a)) {
-            (Some(reach), Some(schedule)) => {
-                let mut spaces = schedule
-                    .spaces(reach)
-                    .into_iter()
-                    .map(|(at, w)| rs.plain.clone().with_weights(&w).map(|s| (at, s)))
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
-                let (_, first) = spaces.remove(0);
-                (first, spaces)
-            }
+            (Some(reach), Some(schedule)) => schedule_spaces(&rs.plain, reach, &schedule.0)?,
             _ => (rs.space.clone(), Vec::new()),
         };
         let (birrt, rrt) = (

@@ -3,9 +3,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-/// The largest power of the reach weights a schedule may take: the Fetch's lightest joint
-/// (0.25) weighs 0.004 at the fourth power, its edges checked every 8 rad of it.
-const MAX_POWER: f64 = 4.0;
+use hearth_planning::pipeline::MAX_WEIGHT_POWER as MAX_POWER;
 
 /// Powers of the joints' reach weights (`RobotValidity::joint_weights`), each with the
 /// iteration from which BiRRT plans with it (`BiRrt::plan_with_metrics`): `2,1@160000` plans
@@ -72,19 +70,10 @@ impl fmt::Display for WeightSchedule {
     }
 }
 
-impl WeightSchedule {
-    /// The weights `reach` raised to each power, with the iteration each starts at.
-    pub fn spaces(&self, reach: &[f64]) -> Vec<(u64, Vec<f64>)> {
-        self.0
-            .iter()
-            .map(|&(at, power)| (at, reach.iter().map(|w| w.powf(power)).collect()))
-            .collect()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use hearth_planning::space::Space;
 
     #[test]
     fn parses_and_prints() {
@@ -93,9 +82,13 @@ mod tests {
         // The Fetch's default, as `--help` writes it.
         assert_eq!(s.0, hearth_planning::pipeline::FETCH_WEIGHT_SCHEDULE);
         assert_eq!(s.to_string(), "2, 1 from iteration 160000, 0.5 from iteration 360000");
-        let w = s.spaces(&[1.0, 0.25]);
-        assert_eq!(w[0].1, vec![1.0, 0.0625]);
-        assert_eq!(w[2], (360_000, vec![1.0, 0.5]));
+        let plain = hearth_planning::space::JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap();
+        let (first, later) = hearth_planning::pipeline::schedule_spaces(&plain, &[1.0, 0.25], &s.0).unwrap();
+        assert_eq!(first.euclidean_weights(), Some(&[1.0, 0.0625][..]));
+        assert_eq!(
+            (later[1].0, later[1].1.euclidean_weights()),
+            (360_000, Some(&[1.0, 0.5][..]))
+        );
         assert_eq!("1".parse::<WeightSchedule>().unwrap().0, vec![(0, 1.0)]);
     }
 
