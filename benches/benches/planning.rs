@@ -10,7 +10,10 @@
 //! 1,000 states packed in a pocket (±0.3 rad) from samples of the whole space;
 //! `nn/k10_4k_fetch` queries the 10 nearest among 4,000 random configurations of the Fetch's
 //! torso and arm (three continuous joints), the size of a LazyPRM roadmap after a few tenths
-//! of a second. `queries/…` plans 16 queries between random valid configurations in one
+//! of a second. `nn/nearest_2k_se2` queries among 2,000 poses of a mobile base in a 10 m × 8 m
+//! home and `nn/nearest_20k_base_arm` among 20,000 states of the Fetch's base, torso and arm:
+//! metrics that are no Euclidean ones, searched with k-d trees on their Euclidean bound.
+//! `queries/…` plans 16 queries between random valid configurations in one
 //! scene: BiRRT, a fresh LazyPRM per query, and one LazyPRM that keeps its roadmap.
 //! `pipeline/…` plans the table_pick problems through `MotionPlanner` (BiRRT, parabolic
 //! smoothing, the check at 0.002 rad), in the joints' reach metric and without it.
@@ -375,5 +378,51 @@ fn nearest_neighbours(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, planners, nearest_neighbours);
+/// One nearest-state query among `n` random states of `space`, inserted with interleaved
+/// queries as a tree planner makes them.
+fn nearest_among<S: hearth_planning::space::Space>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    space: &S,
+    n: usize,
+) {
+    use hearth_planning::nn::NearestNeighbors;
+    let dim = space.dim();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+    let mut nn = NearestNeighbors::new(dim);
+    let mut q = vec![0.0; dim];
+    for _ in 0..n {
+        space.sample(&mut rng, &mut q);
+        nn.insert(&q);
+        nn.nearest(space, &q);
+    }
+    let queries: Vec<Vec<f64>> = (0..256)
+        .map(|_| {
+            space.sample(&mut rng, &mut q);
+            q.clone()
+        })
+        .collect();
+    let mut i = 0;
+    g.bench_function(format!("nearest_{name}"), |b| {
+        b.iter(|| {
+            i = (i + 1) % queries.len();
+            black_box(nn.nearest(space, &queries[i]))
+        })
+    });
+}
+
+/// The navigation planner's SE(2) poses and a mobile manipulator's base + torso + arm.
+fn mobile_nearest_neighbours(c: &mut Criterion) {
+    use hearth_planning::space::{CompoundSpace, Se2Space};
+    let mut g = c.benchmark_group("nn");
+    let base = Se2Space::new([0.0, 0.0], [10.0, 8.0]).expect("valid bounds");
+    nearest_among(&mut g, "2k_se2", &base, 2_000);
+    let model = RobotModel::builtin("fetch").expect("built-in robot");
+    let arm =
+        JointSpace::from_chain(&Chain::named(&model, "arm_with_torso").expect("built-in chain")).expect("valid bounds");
+    nearest_among(&mut g, "20k_base_arm", &CompoundSpace::new(base, arm), 20_000);
+    g.finish();
+}
+
+criterion_group!(benches, planners, nearest_neighbours, mobile_nearest_neighbours);
 criterion_main!(benches);

@@ -5,8 +5,9 @@
 //! (wrapping) coordinates, SE(2) yaw and weighted or compound metrics are all handled exactly.
 //! Spaces whose metric is a weighted Euclidean one ([`Space::euclidean_weights`]: bounded
 //! joints only), or one on a torus ([`Space::wrapping_weights`]: bounded and continuous
-//! joints, the angles' differences taken the short way round) get k-d trees instead, which
-//! prune far better in 7 or 8 dimensions (a nearest-neighbour query among 20,000 Panda states
+//! joints, the angles' differences taken the short way round), or is bounded by one from both
+//! sides ([`Space::euclidean_bound`]: SE(2) bases, compound base + arm spaces) get k-d trees
+//! instead, which prune far better in 7 or 8 dimensions (a nearest-neighbour query among 20,000 Panda states
 //! takes about 5 µs with k-d trees and 38 µs with vantage-point trees; with one joint
 //! continuous, 8 µs). The k-d trees keep each node's bounding box, which prunes queries far
 //! from every state: 1,000 states in a pocket answer a sample of the whole space in about
@@ -27,7 +28,7 @@ use std::f64::consts::{PI, TAU};
 use hearth_kinematics::wrap_angle;
 use wide::f32x8;
 
-use crate::space::Space;
+use crate::space::{EuclideanBound, Space};
 
 /// States in the linear buffer before they are indexed by a tree.
 const BUFFER: usize = 32;
@@ -317,7 +318,7 @@ impl NearestNeighbors {
     fn index<S: Space>(&mut self, space: &S, ids: Vec<u32>) {
         if !ids.is_empty() {
             let tree = match weighted_metric(space, self.dim) {
-                Some((w, wraps)) => Tree::Kd(KdTree::build(&self.states, self.dim, w, wraps, ids)),
+                Some(bound) => Tree::Kd(KdTree::build(&self.states, self.dim, bound, ids)),
                 None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids)),
             };
             self.trees.push(tree);
@@ -350,6 +351,7 @@ impl NearestNeighbors {
                 weights: &lanes.weights,
                 lane_periods: &lanes.lane_periods,
                 reach: lanes.reach,
+                stretch: lanes.stretch,
             };
             if lanes.wraps.is_empty() {
                 view.scan::<S, C, false>(space, self, q, q, c);
@@ -738,10 +740,13 @@ enum KdNode {
     Inner { axis: u32, split: f64, low: u32, high: u32 },
 }
 
-/// A static k-d tree over some of the arena's states, for a weighted Euclidean metric.
+/// A static k-d tree over some of the arena's states, for a weighted Euclidean metric or a
+/// metric it bounds ([`EuclideanBound`](crate::space::EuclideanBound)).
 #[derive(Clone, Debug)]
 struct KdTree {
     ids: Vec<u32>,
+    /// How far the space's distance may exceed the weighted Euclidean one (1: they are equal).
+    stretch: f64,
     /// The states' coordinates in `ids` order, so that a leaf reads contiguous memory.
     points: Vec<f64>,
     nodes: Vec<KdNode>,
@@ -773,12 +778,20 @@ struct KdTree {
 }
 
 impl KdTree {
-    fn build(states: &[f64], dim: usize, weights: &[f64], wraps: Option<&[bool]>, mut ids: Vec<u32>) -> Self {
-        let wraps = wraps
-            .filter(|w| w.contains(&true))
-            .map_or_else(Vec::new, <[bool]>::to_vec);
+    fn build(states: &[f64], dim: usize, bound: EuclideanBound<'_>, mut ids: Vec<u32>) -> Self {
+        let EuclideanBound {
+            weights,
+            wraps,
+            stretch,
+        } = bound;
+        let wraps = if wraps.contains(&true) {
+            wraps.to_vec()
+        } else {
+            Vec::new()
+        };
         let mut tree = Self {
             ids: Vec::with_capacity(ids.len()),
+            stretch,
             points: Vec::with_capacity(ids.len() * dim),
             nodes: Vec::new(),
             weights: weights.to_vec(),
@@ -1016,6 +1029,7 @@ impl KdTree {
             weights: &self.weights,
             lane_periods: &self.lane_periods,
             reach: self.reach,
+            stretch: self.stretch,
         }
     }
 }
@@ -1032,6 +1046,8 @@ struct LaneView<'a> {
     lane_periods: &'a [f32],
     /// Largest weighted magnitude of a coordinate or a period (bounds the f32 rounding).
     reach: f64,
+    /// How far the space's distance may exceed the weighted Euclidean one.
+    stretch: f64,
 }
 
 impl LaneView<'_> {
@@ -1040,8 +1056,9 @@ impl LaneView<'_> {
     /// than the f32 rounding of the states, the query and the sums can move a distance); the
     /// space's own distance decides, as in a leaf, so the answers are the descent's to the
     /// last bit. A nearest-state query also filters the first block with its smallest sum of
-    /// a live state: that state is at most that far (widened the same way), so the nearest
-    /// state's own sum lies within twice the widening of it. Without that bound every state
+    /// a live state: that state is at most that far (widened the same way, and times the
+    /// stretch of a bounding metric), so the nearest state's own sum lies within that and the
+    /// widening. Without that bound every state
     /// of the first block would reach the space's distance while the radius is still
     /// infinite; after it, the radius set by the states offered prunes as well.
     fn scan<S: Space, C: Collector, const WRAP: bool>(
@@ -1106,9 +1123,11 @@ impl LaneView<'_> {
                 };
                 if smallest < least && live() {
                     least = smallest;
-                    // That state's distance ≤ √(sum·(1 + 10⁻⁵)) + SLACK + slop, and so is the
-                    // nearest state's; its sum then passes this bound.
-                    least_bound = to_f32((f64::from(least) * (1.0 + 1e-5)).sqrt() + 2.0 * (SLACK + slop));
+                    // That state's distance ≤ stretch·(√(sum·(1 + 10⁻⁵)) + SLACK + slop), and
+                    // so is the nearest state's, whose sum (a lower bound of its distance)
+                    // then passes this bound.
+                    let far = self.stretch * ((f64::from(least) * (1.0 + 1e-5)).sqrt() + SLACK + slop);
+                    least_bound = to_f32(far + SLACK + slop);
                 }
                 bound = bound.min(least_bound);
             }
@@ -1129,14 +1148,10 @@ impl LaneView<'_> {
     }
 }
 
-/// The space's weighted metric, when an index of `dim`-dimensional states can use it for k-d
-/// trees and lanes: its weights, and which coordinates are angles when some may be.
-fn weighted_metric<S: Space>(space: &S, dim: usize) -> Option<(&[f64], Option<&[bool]>)> {
-    space
-        .euclidean_weights()
-        .map(|w| (w, None))
-        .or_else(|| space.wrapping_weights().map(|(w, wraps)| (w, Some(wraps))))
-        .filter(|(w, wraps)| dim <= KD_MAX_DIM && w.len() == dim && wraps.is_none_or(|x| x.len() == dim))
+/// The space's weighted Euclidean metric or bound ([`Space::euclidean_bound`]), when an index
+/// of `dim`-dimensional states can use it for k-d trees and lanes.
+fn weighted_metric<S: Space>(space: &S, dim: usize) -> Option<EuclideanBound<'_>> {
+    space.euclidean_bound().filter(|b| dim <= KD_MAX_DIM && b.usable(dim))
 }
 
 /// `q` with the coordinates that `wraps` marks wrapped into `(−π, π]` (the first `q.len()`
@@ -1162,6 +1177,8 @@ struct BufferLanes {
     wraps: Vec<bool>,
     lane_periods: Vec<f32>,
     reach: f64,
+    /// The metric's stretch ([`EuclideanBound`](crate::space::EuclideanBound)).
+    stretch: f64,
     /// Buffer entries written so far (0 after a flush: the next query starts anew).
     written: usize,
     /// Whether the space has a weighted metric and every written state is small enough for
@@ -1178,14 +1195,15 @@ impl BufferLanes {
         self.lane_periods.clear();
         self.reach = 0.0;
         self.usable = false;
-        let Some((weights, wraps)) = weighted_metric(space, dim) else {
+        let Some(bound) = weighted_metric(space, dim) else {
             return;
         };
-        self.weights.extend_from_slice(weights);
-        if let Some(wraps) = wraps.filter(|w| w.contains(&true)) {
-            self.wraps.extend_from_slice(wraps);
+        self.stretch = bound.stretch;
+        self.weights.extend_from_slice(bound.weights);
+        if bound.wraps.contains(&true) {
+            self.wraps.extend_from_slice(bound.wraps);
         }
-        for (axis, &w) in weights.iter().enumerate() {
+        for (axis, &w) in bound.weights.iter().enumerate() {
             if self.wraps.get(axis) == Some(&true) {
                 self.reach = self.reach.max(w * TAU);
                 self.lane_periods.push((w * TAU) as f32);

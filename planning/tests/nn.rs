@@ -2,7 +2,7 @@
 //! metric, continuous (wrapping) joints and SE(2) yaw included.
 
 use hearth_planning::nn::NearestNeighbors;
-use hearth_planning::space::{JointSpace, Se2Space, Space};
+use hearth_planning::space::{CompoundSpace, EuclideanBound, JointSpace, Se2Space, Space};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
@@ -30,6 +30,17 @@ fn euclidean_space() -> JointSpace {
 
 fn se2_space() -> Se2Space {
     Se2Space::new([-2.0, -2.0], [2.0, 2.0]).unwrap()
+}
+
+/// A mobile manipulator's space: an SE(2) base and an arm with a continuous joint, the arm
+/// weighted down (its metric is bounded by a weighted Euclidean one with stretch 2).
+fn base_and_arm(yaw_weight: f64, arm_weight: f64) -> CompoundSpace<Se2Space, JointSpace> {
+    let base = se2_space().with_yaw_weight(yaw_weight).unwrap();
+    let arm = JointSpace::new(&[-1.0, 0.0, -2.0], &[1.0, 0.0, 0.5], &[false, true, false])
+        .unwrap()
+        .with_weights(&[1.0, 0.7, 0.4])
+        .unwrap();
+    CompoundSpace::new(base, arm).with_weights(1.0, arm_weight).unwrap()
 }
 
 /// Inserts `n` samples (removing every `remove_every`-th), then compares queries with a scan.
@@ -175,6 +186,28 @@ proptest! {
     fn se2_space_with_wrapping_yaw(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12) {
         agrees_with_brute_force(&se2_space(), seed, n, remove, k, 0.8);
     }
+
+    /// Yaw weights from none to dominant: the Euclidean bound's k-d trees still give the
+    /// SE(2) metric's exact answers.
+    #[test]
+    fn se2_space_with_any_yaw_weight(seed in any::<u64>(), n in 0usize..600, k in 0usize..12, yaw in prop_oneof![Just(0.0), 0.0f64..5.0, Just(40.0)]) {
+        let space = se2_space().with_yaw_weight(yaw).unwrap();
+        agrees_with_brute_force(&space, seed, n, 3, k, 0.8);
+    }
+
+    #[test]
+    fn base_and_arm_compound(seed in any::<u64>(), n in 0usize..600, remove in 0usize..7, k in 0usize..12, yaw in 0.0f64..3.0, arm in 0.0f64..3.0) {
+        agrees_with_brute_force(&base_and_arm(yaw, arm), seed, n, remove, k, 1.2);
+    }
+
+    /// A bound with NaN or negative weights, of the wrong length, or with a stretch below 1
+    /// or infinite is ignored: the index falls back on the triangle inequality and stays
+    /// exact.
+    #[test]
+    fn unusable_bounds_are_ignored(seed in any::<u64>(), n in 0usize..400, k in 0usize..8, bad in 0usize..5) {
+        let space = Counting { inner: se2_space(), calls: Default::default(), euclidean: true, bad: Some(bad) };
+        agrees_with_brute_force(&space, seed, n, 4, k, 0.8);
+    }
 }
 
 proptest! {
@@ -230,15 +263,17 @@ fn wraps_through_pi() {
     assert_eq!(nn.nearest(&space, &[0.0, 0.0, 0.0]), None);
 }
 
-/// A space that counts its distance evaluations; it declares its metric Euclidean (so the
-/// index builds k-d trees) only when `euclidean` is set.
-struct Counting {
-    inner: JointSpace,
+/// A space that counts its distance evaluations; it declares its metric Euclidean, or bounded
+/// by a Euclidean one (so the index builds k-d trees), only when `euclidean` is set. `bad`
+/// makes it declare an unusable bound of one of five kinds instead.
+struct Counting<S = JointSpace> {
+    inner: S,
     calls: std::sync::atomic::AtomicU64,
     euclidean: bool,
+    bad: Option<usize>,
 }
 
-impl Space for Counting {
+impl<S: Space> Space for Counting<S> {
     fn dim(&self) -> usize {
         self.inner.dim()
     }
@@ -280,11 +315,34 @@ impl Space for Counting {
             None
         }
     }
+    fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
+        let bound = self.inner.euclidean_bound().filter(|_| self.euclidean)?;
+        Some(match self.bad {
+            None => bound,
+            Some(0) => EuclideanBound {
+                weights: &[1.0, f64::NAN, 0.5],
+                ..bound
+            },
+            Some(1) => EuclideanBound {
+                weights: &[1.0, -1.0, 0.5],
+                ..bound
+            },
+            Some(2) => EuclideanBound {
+                weights: &[1.0, 1.0],
+                ..bound
+            },
+            Some(3) => EuclideanBound { stretch: 0.9, ..bound },
+            Some(_) => EuclideanBound {
+                stretch: f64::INFINITY,
+                ..bound
+            },
+        })
+    }
 }
 
 /// Distance evaluations per nearest query among `n` states inserted with interleaved
 /// queries, as in a tree planner.
-fn evaluations_per_query(space: &Counting, n: usize) -> u64 {
+fn evaluations_per_query<S: Space>(space: &Counting<S>, n: usize) -> u64 {
     let mut rng = Pcg64Mcg::seed_from_u64(9);
     let dim = space.dim();
     let mut nn = NearestNeighbors::new(dim);
@@ -319,6 +377,7 @@ fn k_d_trees_prune_better_than_vantage_points_in_seven_dimensions() {
             inner: joints(),
             calls: Default::default(),
             euclidean,
+            bad: None,
         };
         evaluations_per_query(&space, 20_000)
     };
@@ -328,11 +387,30 @@ fn k_d_trees_prune_better_than_vantage_points_in_seven_dimensions() {
 }
 
 #[test]
+fn k_d_trees_on_the_euclidean_bound_prune_better_for_a_mobile_manipulator() {
+    // The SE(2) base and a four-joint arm (one continuous): no Euclidean metric, but one
+    // bounded by a Euclidean metric with stretch 2.
+    let count = |euclidean| {
+        let space = Counting {
+            inner: base_and_arm(0.5, 1.0),
+            calls: Default::default(),
+            euclidean,
+            bad: None,
+        };
+        evaluations_per_query(&space, 20_000)
+    };
+    let (kd, vp) = (count(true), count(false));
+    println!("nearest among 20000 base + arm states: k-d {kd}, vantage points {vp} distance evaluations");
+    assert!(kd * 2 < vp, "k-d {kd}, vantage points {vp}");
+}
+
+#[test]
 fn queries_are_not_a_linear_scan() {
     let space = Counting {
         inner: JointSpace::new(&[0.0, 0.0, 0.0], &[1.0, 1.0, 0.0], &[false, false, true]).unwrap(),
         calls: Default::default(),
         euclidean: false,
+        bad: None,
     };
     let mut rng = Pcg64Mcg::seed_from_u64(9);
     let mut nn = NearestNeighbors::new(3);
@@ -411,6 +489,7 @@ fn buffered_states_are_filtered_in_lanes_and_removed_ones_skipped() {
         inner: JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false]).unwrap(),
         calls: Default::default(),
         euclidean: true,
+        bad: None,
     };
     let mut nn = NearestNeighbors::new(2);
     let mut rng = Pcg64Mcg::seed_from_u64(4);

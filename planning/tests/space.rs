@@ -96,6 +96,18 @@ fn check_invariants<S: Space>(space: &S, a: &[f64], b: &[f64], c: &[f64], t: f64
     prop_assert!((dab - space.distance(b, a)).abs() < EPS);
     prop_assert!(space.distance(a, c) <= dab + space.distance(b, c) + EPS);
 
+    // The Euclidean bound, where the space offers one: E ≤ distance ≤ stretch·E.
+    if let Some(bound) = space.euclidean_bound() {
+        prop_assert!(bound.stretch >= 1.0 && bound.weights.len() == n);
+        let e = bound.distance(a, b);
+        prop_assert!(e <= dab * (1.0 + 1e-12) + EPS, "bound {e} above the distance {dab}");
+        prop_assert!(
+            dab <= bound.stretch * e * (1.0 + 1e-12) + EPS,
+            "distance {dab} above {} × {e}",
+            bound.stretch
+        );
+    }
+
     // The difference leads from a to b, the short way.
     let mut d = vec![0.0; n];
     space.difference(a, b, &mut d);

@@ -2,7 +2,7 @@
 
 use rand::Rng;
 
-use super::{Space, SpaceError, valid_weight};
+use super::{EuclideanBound, Space, SpaceError, valid_weight};
 
 /// Two spaces concatenated: a state is the first space's coordinates followed by the second's
 /// (e.g. an [`Se2Space`](super::Se2Space) base then a [`JointSpace`](super::JointSpace) arm).
@@ -36,6 +36,9 @@ pub struct CompoundSpace<A, B> {
     weights: [f64; 2],
     lower: Vec<f64>,
     upper: Vec<f64>,
+    /// The parts' Euclidean bounds side by side ([`Space::euclidean_bound`]): weights,
+    /// angles, stretch; `None` when a part has none.
+    bound: Option<(Vec<f64>, Vec<bool>, f64)>,
 }
 
 impl<A: Space, B: Space> CompoundSpace<A, B> {
@@ -54,12 +57,14 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
     pub fn new(first: A, second: B) -> Self {
         let lower = first.lower().iter().chain(second.lower()).copied().collect();
         let upper = first.upper().iter().chain(second.upper()).copied().collect();
+        let bound = joint_bound(&first, &second, [1.0, 1.0]);
         Self {
             first,
             second,
             weights: [1.0, 1.0],
             lower,
             upper,
+            bound,
         }
     }
 
@@ -85,6 +90,7 @@ impl<A: Space, B: Space> CompoundSpace<A, B> {
             }
         }
         self.weights = [first, second];
+        self.bound = joint_bound(&self.first, &self.second, self.weights);
         Ok(self)
     }
 
@@ -253,4 +259,54 @@ impl<A: Space, B: Space> Space for CompoundSpace<A, B> {
             self.second.coordinate_name(i - n)
         }
     }
+
+    /// The parts' bounds side by side, each part's weights times its distance weight. With
+    /// `Eₖ ≤ dₖ ≤ cₖ·Eₖ` for the parts, the bound `E = √((w₁E₁)² + (w₂E₂)²)` is at most
+    /// `w₁E₁ + w₂E₂ ≤ w₁d₁ + w₂d₂`, the distance, which is at most `max(c₁, c₂)·√2·E`. A sum of
+    /// two Euclidean parts is no Euclidean metric, so even two joint spaces have stretch √2.
+    ///
+    /// ```
+    /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space, Space};
+    ///
+    /// let base = Se2Space::new([-5.0, -5.0], [5.0, 5.0])?;
+    /// let arm = JointSpace::new(&[-1.0], &[1.0], &[false])?;
+    /// let space = CompoundSpace::new(base, arm).with_weights(1.0, 0.5)?;
+    /// let bound = space.euclidean_bound().unwrap();
+    /// assert_eq!(bound.weights, &[1.0, 1.0, 0.5, 0.5][..]);
+    /// assert_eq!(bound.wraps, &[false, false, true, false][..]);
+    /// assert!((bound.stretch - 2.0).abs() < 1e-12); // √2 for the base, √2 for the sum
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
+        self.bound.as_ref().map(|(weights, wraps, stretch)| EuclideanBound {
+            weights,
+            wraps,
+            stretch: *stretch,
+        })
+    }
+}
+
+/// [`CompoundSpace::euclidean_bound`]'s weights, angles and stretch, from the parts' bounds
+/// and distance weights.
+fn joint_bound<A: Space, B: Space>(first: &A, second: &B, weights: [f64; 2]) -> Option<(Vec<f64>, Vec<bool>, f64)> {
+    let parts = [
+        (first.euclidean_bound()?, first.dim()),
+        (second.euclidean_bound()?, second.dim()),
+    ];
+    let mut w = Vec::new();
+    let mut wraps = Vec::new();
+    let mut stretch = 1.0f64;
+    for ((bound, dim), scale) in parts.iter().zip(weights) {
+        if !bound.usable(*dim) {
+            return None;
+        }
+        w.extend(bound.weights.iter().map(|x| x * scale));
+        if bound.wraps.is_empty() {
+            wraps.extend(std::iter::repeat_n(false, *dim));
+        } else {
+            wraps.extend_from_slice(bound.wraps);
+        }
+        stretch = stretch.max(bound.stretch);
+    }
+    Some((w, wraps, stretch * std::f64::consts::SQRT_2))
 }

@@ -261,6 +261,99 @@ pub trait Space: Send + Sync {
     fn wrapping_weights(&self) -> Option<(&[f64], &[bool])> {
         None
     }
+
+    /// A weighted Euclidean distance that bounds [`Space::distance`] from both sides
+    /// ([`EuclideanBound`]), so that nearest-neighbour search can use k-d trees even where the
+    /// metric is not Euclidean itself. The default offers [`Space::euclidean_weights`] or
+    /// [`Space::wrapping_weights`] with stretch 1 (the bound is the distance); an
+    /// [`Se2Space`] offers its translation and weighted yaw, which its distance (a sum, not a
+    /// root of squares) exceeds by at most √2.
+    ///
+    /// ```
+    /// use hearth_planning::space::{JointSpace, Se2Space, Space};
+    ///
+    /// let arm = JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false])?;
+    /// let bound = arm.euclidean_bound().unwrap();
+    /// assert_eq!((bound.weights, bound.stretch), (&[1.0, 1.0][..], 1.0));
+    /// let base = Se2Space::new([0.0, 0.0], [4.0, 4.0])?;
+    /// let (a, b) = ([0.0, 0.0, 0.0], [3.0, 4.0, 1.0]);
+    /// let bound = base.euclidean_bound().unwrap();
+    /// let e = bound.distance(&a, &b);
+    /// assert!(e <= base.distance(&a, &b) && base.distance(&a, &b) <= bound.stretch * e);
+    /// # Ok::<(), hearth_planning::space::SpaceError>(())
+    /// ```
+    fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
+        match self.euclidean_weights() {
+            Some(weights) => Some(EuclideanBound {
+                weights,
+                wraps: &[],
+                stretch: 1.0,
+            }),
+            None => self.wrapping_weights().map(|(weights, wraps)| EuclideanBound {
+                weights,
+                wraps,
+                stretch: 1.0,
+            }),
+        }
+    }
+}
+
+/// A weighted Euclidean distance `E(a, b) = √Σ (wᵢ dᵢ)²` that bounds a space's distance `D`
+/// from both sides: `E ≤ D ≤ stretch · E`, where `dᵢ = bᵢ − aᵢ`, wrapped into `(−π, π]` for
+/// a coordinate that `wraps` marks (an empty `wraps` marks none).
+///
+/// Nearest-neighbour search ([`NearestNeighbors`](crate::nn::NearestNeighbors)) prunes with
+/// `E` as a lower bound and decides with the space's own distance, so its answers stay
+/// exact; the tighter the bound (`stretch` near 1), the more it prunes. A bound with weights
+/// that are not finite and non-negative, of another length than the space, or a stretch
+/// below 1 or not finite is ignored (the search then relies on the triangle inequality).
+///
+/// ```
+/// use hearth_planning::space::EuclideanBound;
+///
+/// let bound = EuclideanBound { weights: &[1.0, 2.0], wraps: &[], stretch: 1.0 };
+/// assert_eq!(bound.distance(&[0.0, 0.0], &[3.0, 2.0]), 5.0);
+/// let angle = EuclideanBound { weights: &[1.0], wraps: &[true], stretch: 1.0 };
+/// assert!((angle.distance(&[3.0], &[-3.0]) - (std::f64::consts::TAU - 6.0)).abs() < 1e-12);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EuclideanBound<'a> {
+    /// Weight per coordinate.
+    pub weights: &'a [f64],
+    /// Which coordinates are angles (empty: none).
+    pub wraps: &'a [bool],
+    /// How far the space's distance may exceed `E`, as a factor (at least 1).
+    pub stretch: f64,
+}
+
+impl EuclideanBound<'_> {
+    /// `E(a, b)`, the bound itself.
+    ///
+    /// ```
+    /// use hearth_planning::space::EuclideanBound;
+    ///
+    /// let bound = EuclideanBound { weights: &[0.5], wraps: &[], stretch: 1.0 };
+    /// assert_eq!(bound.distance(&[1.0], &[3.0]), 1.0);
+    /// ```
+    pub fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        let mut sum = 0.0;
+        for (i, ((&x, &y), &w)) in a.iter().zip(b).zip(self.weights).enumerate() {
+            let wraps = self.wraps.get(i).copied().unwrap_or(false);
+            let d = w * coordinate_difference(wraps, x, y);
+            sum += d * d;
+        }
+        sum.sqrt()
+    }
+
+    /// Whether search can use this bound for `dim`-dimensional states (see the type's
+    /// documentation).
+    pub(crate) fn usable(&self, dim: usize) -> bool {
+        self.weights.len() == dim
+            && (self.wraps.is_empty() || self.wraps.len() == dim)
+            && self.weights.iter().all(|w| w.is_finite() && *w >= 0.0)
+            && self.stretch.is_finite()
+            && self.stretch >= 1.0
+    }
 }
 
 /// Writes into `out` the state `range` from `from` on the way to `target`, or `target` itself

@@ -6,11 +6,13 @@ use hearth_kinematics::wrap_angle;
 use rand::Rng;
 
 use super::{
-    Space, SpaceError, check_bounds, check_state, coordinate_difference, coordinate_interpolate, sample_interval,
-    valid_weight, within,
+    EuclideanBound, Space, SpaceError, check_bounds, check_state, coordinate_difference, coordinate_interpolate,
+    sample_interval, valid_weight, within,
 };
 
 const NAMES: [&str; 3] = ["x", "y", "yaw"];
+/// Which coordinates are angles: yaw.
+const WRAPS: [bool; 3] = [false, false, true];
 
 /// SE(2): a planar base pose `(x, y, yaw)`, with `x` and `y` in a rectangle and `yaw` wrapping
 /// in `[-π, π]`.
@@ -39,6 +41,8 @@ pub struct Se2Space {
     lower: [f64; 3],
     upper: [f64; 3],
     yaw_weight: f64,
+    /// `[1, 1, yaw_weight]`: the weights of the Euclidean bound on the distance.
+    bound_weights: [f64; 3],
 }
 
 impl Se2Space {
@@ -80,6 +84,7 @@ impl Se2Space {
             lower: [lower[0], lower[1], -PI],
             upper: [upper[0], upper[1], PI],
             yaw_weight: Self::DEFAULT_YAW_WEIGHT,
+            bound_weights: [1.0, 1.0, Self::DEFAULT_YAW_WEIGHT],
         })
     }
 
@@ -101,6 +106,7 @@ impl Se2Space {
             });
         }
         self.yaw_weight = weight;
+        self.bound_weights[2] = weight;
         Ok(self)
     }
 
@@ -197,5 +203,16 @@ impl Space for Se2Space {
 
     fn coordinate_name(&self, i: usize) -> Option<&str> {
         NAMES.get(i).copied()
+    }
+
+    /// `√(dx² + dy² + (w·dyaw)²)`: the distance, `√(dx² + dy²) + w·|dyaw|`, is at least
+    /// that and at most √2 times it (a sum of two non-negative terms against the root of
+    /// their squares).
+    fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
+        Some(EuclideanBound {
+            weights: &self.bound_weights,
+            wraps: &WRAPS,
+            stretch: std::f64::consts::SQRT_2,
+        })
     }
 }
