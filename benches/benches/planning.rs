@@ -327,19 +327,9 @@ fn nearest_neighbours(c: &mut Criterion) {
             nn.insert(&q);
             nn.nearest(space, &q);
         }
-        let queries: Vec<[f64; 7]> = (0..256)
-            .map(|_| {
-                space.sample(&mut rng, &mut q);
-                q
-            })
-            .collect();
+        let queries = random_queries(space, &mut rng);
+        time_nearest(&mut g, name, &mut nn, space, &queries);
         let mut i = 0;
-        g.bench_function(format!("nearest_{name}"), |b| {
-            b.iter(|| {
-                i = (i + 1) % queries.len();
-                black_box(nn.nearest(space, &queries[i]))
-            })
-        });
         if !pocket {
             g.bench_function(format!("k10_{name}"), |b| {
                 b.iter(|| {
@@ -396,12 +386,29 @@ fn nearest_among<S: hearth_planning::space::Space>(
         nn.insert(&q);
         nn.nearest(space, &q);
     }
-    let queries: Vec<Vec<f64>> = (0..256)
+    let queries = random_queries(space, &mut rng);
+    time_nearest(g, name, &mut nn, space, &queries);
+}
+
+/// 256 random states of `space`, the queries of a nearest-neighbour bench.
+fn random_queries<S: hearth_planning::space::Space>(space: &S, rng: &mut rand_pcg::Pcg64Mcg) -> Vec<Vec<f64>> {
+    let mut q = vec![0.0; space.dim()];
+    (0..256)
         .map(|_| {
-            space.sample(&mut rng, &mut q);
+            space.sample(rng, &mut q);
             q.clone()
         })
-        .collect();
+        .collect()
+}
+
+/// Times `nn/nearest_{name}`: one nearest-state query per iteration, cycling through `queries`.
+fn time_nearest<S: hearth_planning::space::Space>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    nn: &mut hearth_planning::nn::NearestNeighbors,
+    space: &S,
+    queries: &[Vec<f64>],
+) {
     let mut i = 0;
     g.bench_function(format!("nearest_{name}"), |b| {
         b.iter(|| {

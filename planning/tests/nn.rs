@@ -273,6 +273,16 @@ struct Counting<S = JointSpace> {
     bad: Option<usize>,
 }
 
+/// A [`Counting`] space over `inner` that declares a usable bound when `euclidean` is set.
+fn counting<S: Space>(inner: S, euclidean: bool) -> Counting<S> {
+    Counting {
+        inner,
+        calls: Default::default(),
+        euclidean,
+        bad: None,
+    }
+}
+
 impl<S: Space> Space for Counting<S> {
     fn dim(&self) -> usize {
         self.inner.dim()
@@ -372,17 +382,15 @@ fn k_d_trees_prune_better_than_vantage_points_in_seven_dimensions() {
         )
         .unwrap()
     };
-    let count = |euclidean| {
-        let space = Counting {
-            inner: joints(),
-            calls: Default::default(),
-            euclidean,
-            bad: None,
-        };
-        evaluations_per_query(&space, 20_000)
-    };
+    prunes_better_with_k_d_trees("seven-dimensional", joints);
+}
+
+/// Distance evaluations per nearest query among 20,000 states of `make()`'s space: with
+/// k-d trees fewer than half those with vantage-point trees.
+fn prunes_better_with_k_d_trees<S: Space>(what: &str, make: impl Fn() -> S) {
+    let count = |euclidean| evaluations_per_query(&counting(make(), euclidean), 20_000);
     let (kd, vp) = (count(true), count(false));
-    println!("nearest among 20000 seven-dimensional states: k-d {kd}, vantage points {vp} distance evaluations");
+    println!("nearest among 20000 {what} states: k-d {kd}, vantage points {vp} distance evaluations");
     assert!(kd * 2 < vp, "k-d {kd}, vantage points {vp}");
 }
 
@@ -390,28 +398,15 @@ fn k_d_trees_prune_better_than_vantage_points_in_seven_dimensions() {
 fn k_d_trees_on_the_euclidean_bound_prune_better_for_a_mobile_manipulator() {
     // The SE(2) base and a four-joint arm (one continuous): no Euclidean metric, but one
     // bounded by a Euclidean metric with stretch 2.
-    let count = |euclidean| {
-        let space = Counting {
-            inner: base_and_arm(0.5, 1.0),
-            calls: Default::default(),
-            euclidean,
-            bad: None,
-        };
-        evaluations_per_query(&space, 20_000)
-    };
-    let (kd, vp) = (count(true), count(false));
-    println!("nearest among 20000 base + arm states: k-d {kd}, vantage points {vp} distance evaluations");
-    assert!(kd * 2 < vp, "k-d {kd}, vantage points {vp}");
+    prunes_better_with_k_d_trees("base + arm", || base_and_arm(0.5, 1.0));
 }
 
 #[test]
 fn queries_are_not_a_linear_scan() {
-    let space = Counting {
-        inner: JointSpace::new(&[0.0, 0.0, 0.0], &[1.0, 1.0, 0.0], &[false, false, true]).unwrap(),
-        calls: Default::default(),
-        euclidean: false,
-        bad: None,
-    };
+    let space = counting(
+        JointSpace::new(&[0.0, 0.0, 0.0], &[1.0, 1.0, 0.0], &[false, false, true]).unwrap(),
+        false,
+    );
     let mut rng = Pcg64Mcg::seed_from_u64(9);
     let mut nn = NearestNeighbors::new(3);
     let mut q = [0.0; 3];
@@ -485,12 +480,10 @@ fn no_state_is_lost_when_trees_merge() {
 #[test]
 fn buffered_states_are_filtered_in_lanes_and_removed_ones_skipped() {
     // 31 states stay in the linear buffer (it is indexed by a tree at 32).
-    let space = Counting {
-        inner: JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false]).unwrap(),
-        calls: Default::default(),
-        euclidean: true,
-        bad: None,
-    };
+    let space = counting(
+        JointSpace::new(&[-1.0, -1.0], &[1.0, 1.0], &[false, false]).unwrap(),
+        true,
+    );
     let mut nn = NearestNeighbors::new(2);
     let mut rng = Pcg64Mcg::seed_from_u64(4);
     let mut states = Vec::new();
