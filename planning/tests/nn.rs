@@ -200,11 +200,11 @@ proptest! {
         agrees_with_brute_force(&base_and_arm(yaw, arm), seed, n, remove, k, 1.2);
     }
 
-    /// A bound with NaN or negative weights, of the wrong length, or with a stretch below 1
-    /// or infinite is ignored: the index falls back on the triangle inequality and stays
+    /// A bound with NaN or negative weights, weights or groups of the wrong length, or with a
+    /// stretch below 1 or infinite is ignored: the index falls back on the triangle inequality and stays
     /// exact.
     #[test]
-    fn unusable_bounds_are_ignored(seed in any::<u64>(), n in 0usize..400, k in 0usize..8, bad in 0usize..5) {
+    fn unusable_bounds_are_ignored(seed in any::<u64>(), n in 0usize..400, k in 0usize..8, bad in 0usize..6) {
         let space = Counting { inner: se2_space(), calls: Default::default(), euclidean: true, bad: Some(bad) };
         agrees_with_brute_force(&space, seed, n, 4, k, 0.8);
     }
@@ -265,7 +265,7 @@ fn wraps_through_pi() {
 
 /// A space that counts its distance evaluations; it declares its metric Euclidean, or bounded
 /// by a Euclidean one (so the index builds k-d trees), only when `euclidean` is set. `bad`
-/// makes it declare an unusable bound of one of five kinds instead.
+/// makes it declare an unusable bound of one of six kinds instead.
 struct Counting<S = JointSpace> {
     inner: S,
     calls: std::sync::atomic::AtomicU64,
@@ -342,6 +342,10 @@ impl<S: Space> Space for Counting<S> {
                 ..bound
             },
             Some(3) => EuclideanBound { stretch: 0.9, ..bound },
+            Some(4) => EuclideanBound {
+                groups: &[0, 1],
+                ..bound
+            },
             Some(_) => EuclideanBound {
                 stretch: f64::INFINITY,
                 ..bound

@@ -96,11 +96,15 @@ fn check_invariants<S: Space>(space: &S, a: &[f64], b: &[f64], c: &[f64], t: f64
     prop_assert!((dab - space.distance(b, a)).abs() < EPS);
     prop_assert!(space.distance(a, c) <= dab + space.distance(b, c) + EPS);
 
-    // The Euclidean bound, where the space offers one: E ≤ distance ≤ stretch·E.
+    // The Euclidean bound, where the space offers one: E ≤ L ≤ distance ≤ stretch·E.
     if let Some(bound) = space.euclidean_bound() {
         prop_assert!(bound.stretch >= 1.0 && bound.weights.len() == n);
-        let e = bound.distance(a, b);
-        prop_assert!(e <= dab * (1.0 + 1e-12) + EPS, "bound {e} above the distance {dab}");
+        let (e, l) = (bound.distance(a, b), bound.lower(a, b));
+        prop_assert!(e <= l * (1.0 + 1e-12) + EPS, "bound {e} above the groups' sum {l}");
+        prop_assert!(
+            l <= dab * (1.0 + 1e-12) + EPS,
+            "groups' sum {l} above the distance {dab}"
+        );
         prop_assert!(
             dab <= bound.stretch * e * (1.0 + 1e-12) + EPS,
             "distance {dab} above {} × {e}",

@@ -36,9 +36,9 @@ pub struct CompoundSpace<A, B> {
     weights: [f64; 2],
     lower: Vec<f64>,
     upper: Vec<f64>,
-    /// The parts' Euclidean bounds side by side ([`Space::euclidean_bound`]): weights,
-    /// angles, stretch; `None` when a part has none.
-    bound: Option<(Vec<f64>, Vec<bool>, f64)>,
+    /// The parts' Euclidean bounds side by side ([`Space::euclidean_bound`]); `None` when a
+    /// part has none.
+    bound: Option<JointBound>,
 }
 
 impl<A: Space, B: Space> CompoundSpace<A, B> {
@@ -264,6 +264,8 @@ impl<A: Space, B: Space> Space for CompoundSpace<A, B> {
     /// `Eₖ ≤ dₖ ≤ cₖ·Eₖ` for the parts, the bound `E = √((w₁E₁)² + (w₂E₂)²)` is at most
     /// `w₁E₁ + w₂E₂ ≤ w₁d₁ + w₂d₂`, the distance, which is at most `max(c₁, c₂)·√2·E`. A sum of
     /// two Euclidean parts is no Euclidean metric, so even two joint spaces have stretch √2.
+    /// The parts' groups stay apart (the second part's numbered after the first's), so `L`
+    /// adds up the parts' own `L`s, each at most the part's distance.
     ///
     /// ```
     /// use hearth_planning::space::{CompoundSpace, JointSpace, Se2Space, Space};
@@ -274,39 +276,61 @@ impl<A: Space, B: Space> Space for CompoundSpace<A, B> {
     /// let bound = space.euclidean_bound().unwrap();
     /// assert_eq!(bound.weights, &[1.0, 1.0, 0.5, 0.5][..]);
     /// assert_eq!(bound.wraps, &[false, false, true, false][..]);
+    /// assert_eq!(bound.groups, &[0, 0, 1, 2][..]);
     /// assert!((bound.stretch - 2.0).abs() < 1e-12); // √2 for the base, √2 for the sum
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
-        self.bound.as_ref().map(|(weights, wraps, stretch)| EuclideanBound {
-            weights,
-            wraps,
-            stretch: *stretch,
+        self.bound.as_ref().map(|b| EuclideanBound {
+            weights: &b.weights,
+            wraps: &b.wraps,
+            groups: &b.groups,
+            stretch: b.stretch,
         })
     }
 }
 
-/// [`CompoundSpace::euclidean_bound`]'s weights, angles and stretch, from the parts' bounds
-/// and distance weights.
-fn joint_bound<A: Space, B: Space>(first: &A, second: &B, weights: [f64; 2]) -> Option<(Vec<f64>, Vec<bool>, f64)> {
+/// The owned values of [`CompoundSpace::euclidean_bound`].
+#[derive(Clone, Debug, PartialEq)]
+struct JointBound {
+    weights: Vec<f64>,
+    wraps: Vec<bool>,
+    groups: Vec<u8>,
+    stretch: f64,
+}
+
+/// [`CompoundSpace::euclidean_bound`]'s values, from the parts' bounds and distance weights
+/// (`None` when a part has no usable bound, or the groups would not fit in `u8`).
+fn joint_bound<A: Space, B: Space>(first: &A, second: &B, weights: [f64; 2]) -> Option<JointBound> {
     let parts = [
         (first.euclidean_bound()?, first.dim()),
         (second.euclidean_bound()?, second.dim()),
     ];
-    let mut w = Vec::new();
-    let mut wraps = Vec::new();
-    let mut stretch = 1.0f64;
+    let mut joint = JointBound {
+        weights: Vec::new(),
+        wraps: Vec::new(),
+        groups: Vec::new(),
+        stretch: 1.0,
+    };
+    let mut next_group = 0u8;
     for ((bound, dim), scale) in parts.iter().zip(weights) {
         if !bound.usable(*dim) {
             return None;
         }
-        w.extend(bound.weights.iter().map(|x| x * scale));
+        joint.weights.extend(bound.weights.iter().map(|x| x * scale));
         if bound.wraps.is_empty() {
-            wraps.extend(std::iter::repeat_n(false, *dim));
+            joint.wraps.extend(std::iter::repeat_n(false, *dim));
         } else {
-            wraps.extend_from_slice(bound.wraps);
+            joint.wraps.extend_from_slice(bound.wraps);
         }
-        stretch = stretch.max(bound.stretch);
+        let first_group = next_group;
+        for i in 0..*dim {
+            let g = first_group.checked_add(bound.groups.get(i).copied().unwrap_or(0))?;
+            next_group = next_group.max(g.checked_add(1)?);
+            joint.groups.push(g);
+        }
+        joint.stretch = joint.stretch.max(bound.stretch);
     }
-    Some((w, wraps, stretch * std::f64::consts::SQRT_2))
+    joint.stretch *= std::f64::consts::SQRT_2;
+    Some(joint)
 }

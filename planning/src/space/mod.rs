@@ -287,11 +287,13 @@ pub trait Space: Send + Sync {
             Some(weights) => Some(EuclideanBound {
                 weights,
                 wraps: &[],
+                groups: &[],
                 stretch: 1.0,
             }),
             None => self.wrapping_weights().map(|(weights, wraps)| EuclideanBound {
                 weights,
                 wraps,
+                groups: &[],
                 stretch: 1.0,
             }),
         }
@@ -300,20 +302,26 @@ pub trait Space: Send + Sync {
 
 /// A weighted Euclidean distance `E(a, b) = √Σ (wᵢ dᵢ)²` that bounds a space's distance `D`
 /// from both sides: `E ≤ D ≤ stretch · E`, where `dᵢ = bᵢ − aᵢ`, wrapped into `(−π, π]` for
-/// a coordinate that `wraps` marks (an empty `wraps` marks none).
+/// a coordinate that `wraps` marks (an empty `wraps` marks none). Where `D` adds up norms of
+/// groups of coordinates (SE(2): the translation's and the yaw's), `groups` names each
+/// coordinate's group, and the sum of the groups' weighted norms, `L` ([`lower`]), must be
+/// at most `D` too; `E ≤ L` always.
 ///
 /// Nearest-neighbour search ([`NearestNeighbors`](crate::nn::NearestNeighbors)) prunes with
-/// `E` as a lower bound and decides with the space's own distance, so its answers stay
-/// exact; the tighter the bound (`stretch` near 1), the more it prunes. A bound with weights
-/// that are not finite and non-negative, of another length than the space, or a stretch
-/// below 1 or not finite is ignored (the search then relies on the triangle inequality).
+/// `E` (and, for a k-d tree's boxes, `L`) as a lower bound and decides with the space's own
+/// distance, so its answers stay exact; the tighter the bound, the more it prunes. A bound
+/// with weights that are not finite and non-negative, of another length than the space, with
+/// more than 32 coordinates, or a stretch below 1 or not finite is ignored (the search then
+/// relies on the triangle inequality).
+///
+/// [`lower`]: EuclideanBound::lower
 ///
 /// ```
 /// use hearth_planning::space::EuclideanBound;
 ///
-/// let bound = EuclideanBound { weights: &[1.0, 2.0], wraps: &[], stretch: 1.0 };
+/// let bound = EuclideanBound { weights: &[1.0, 2.0], wraps: &[], groups: &[], stretch: 1.0 };
 /// assert_eq!(bound.distance(&[0.0, 0.0], &[3.0, 2.0]), 5.0);
-/// let angle = EuclideanBound { weights: &[1.0], wraps: &[true], stretch: 1.0 };
+/// let angle = EuclideanBound { weights: &[1.0], wraps: &[true], groups: &[], stretch: 1.0 };
 /// assert!((angle.distance(&[3.0], &[-3.0]) - (std::f64::consts::TAU - 6.0)).abs() < 1e-12);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -322,6 +330,8 @@ pub struct EuclideanBound<'a> {
     pub weights: &'a [f64],
     /// Which coordinates are angles (empty: none).
     pub wraps: &'a [bool],
+    /// Per coordinate, the group whose norm it counts in (empty: one group of all).
+    pub groups: &'a [u8],
     /// How far the space's distance may exceed `E`, as a factor (at least 1).
     pub stretch: f64,
 }
@@ -332,24 +342,46 @@ impl EuclideanBound<'_> {
     /// ```
     /// use hearth_planning::space::EuclideanBound;
     ///
-    /// let bound = EuclideanBound { weights: &[0.5], wraps: &[], stretch: 1.0 };
+    /// let bound = EuclideanBound { weights: &[0.5], wraps: &[], groups: &[], stretch: 1.0 };
     /// assert_eq!(bound.distance(&[1.0], &[3.0]), 1.0);
     /// ```
     pub fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
-        let mut sum = 0.0;
+        self.group_sums(a, b).iter().sum::<f64>().sqrt()
+    }
+
+    /// `L(a, b)`: the sum over the groups of each group's weighted Euclidean norm (`E` when
+    /// there is one group).
+    ///
+    /// ```
+    /// use hearth_planning::space::EuclideanBound;
+    ///
+    /// // Translation, then a weighted angle: SE(2)'s distance.
+    /// let se2 = EuclideanBound { weights: &[1.0, 1.0, 0.5], wraps: &[false, false, true], groups: &[0, 0, 1], stretch: 2f64.sqrt() };
+    /// assert_eq!(se2.lower(&[0.0, 0.0, 0.0], &[3.0, 4.0, 1.0]), 5.5);
+    /// assert!(se2.distance(&[0.0, 0.0, 0.0], &[3.0, 4.0, 1.0]) < 5.5);
+    /// ```
+    pub fn lower(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.group_sums(a, b).iter().map(|s| s.sqrt()).sum()
+    }
+
+    /// Each group's weighted squared norm of `b − a` (groups that no coordinate names: 0).
+    fn group_sums(&self, a: &[f64], b: &[f64]) -> [f64; 256] {
+        let mut sums = [0.0; 256];
         for (i, ((&x, &y), &w)) in a.iter().zip(b).zip(self.weights).enumerate() {
             let wraps = self.wraps.get(i).copied().unwrap_or(false);
             let d = w * coordinate_difference(wraps, x, y);
-            sum += d * d;
+            sums[self.groups.get(i).map_or(0, |&g| usize::from(g))] += d * d;
         }
-        sum.sqrt()
+        sums
     }
 
     /// Whether search can use this bound for `dim`-dimensional states (see the type's
     /// documentation).
     pub(crate) fn usable(&self, dim: usize) -> bool {
         self.weights.len() == dim
+            && dim <= 32
             && (self.wraps.is_empty() || self.wraps.len() == dim)
+            && (self.groups.is_empty() || self.groups.len() == dim)
             && self.weights.iter().all(|w| w.is_finite() && *w >= 0.0)
             && self.stretch.is_finite()
             && self.stretch >= 1.0

@@ -13,6 +13,8 @@ use super::{
 const NAMES: [&str; 3] = ["x", "y", "yaw"];
 /// Which coordinates are angles: yaw.
 const WRAPS: [bool; 3] = [false, false, true];
+/// The distance's two norms: the translation's and the yaw's.
+const GROUPS: [u8; 3] = [0, 0, 1];
 
 /// SE(2): a planar base pose `(x, y, yaw)`, with `x` and `y` in a rectangle and `yaw` wrapping
 /// in `[-π, π]`.
@@ -207,11 +209,12 @@ impl Space for Se2Space {
 
     /// `√(dx² + dy² + (w·dyaw)²)`: the distance, `√(dx² + dy²) + w·|dyaw|`, is at least
     /// that and at most √2 times it (a sum of two non-negative terms against the root of
-    /// their squares).
+    /// their squares). Its two groups, translation and yaw, make `L` the distance itself.
     fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
         Some(EuclideanBound {
             weights: &self.bound_weights,
             wraps: &WRAPS,
+            groups: &GROUPS,
             stretch: std::f64::consts::SQRT_2,
         })
     }
