@@ -10,9 +10,10 @@
 //! spaces; the bound prunes, the metric decides) get k-d trees instead, which prune far better
 //! in 7 or 8 dimensions (a nearest-neighbour query among 20,000 Panda states takes about 5 µs
 //! with k-d trees and 38 µs with vantage-point trees; with one joint continuous, 8 µs; among
-//! 20,000 states of a mobile base and arm, 65 µs against 129 µs). The k-d trees keep each node's bounding box, which prunes queries far
-//! from every state: 1,000 states in a pocket answer a sample of the whole space in about
-//! 3 µs, against 7 µs with the cells' split planes alone. Trees of up to a few hundred
+//! 20,000 states of a mobile base and arm, 65 µs against 129 µs). The k-d trees keep each
+//! node's bounding box, which prunes queries far from every state: 1,000 states in a pocket
+//! answer a sample of the whole space in about 3 µs, against 7 µs with the cells' split
+//! planes alone. Trees of up to a few hundred
 //! states, trees of up to 2,048 far from the query, and, for a k-nearest query, trees of up
 //! to 4,096 are scanned instead of descended: an f32 copy of their weighted states, eight per
 //! step, filters with a bound widened past its rounding, and the space's distance decides.

@@ -356,7 +356,12 @@ impl EuclideanBound<'_> {
     /// use hearth_planning::space::EuclideanBound;
     ///
     /// // Translation, then a weighted angle: SE(2)'s distance.
-    /// let se2 = EuclideanBound { weights: &[1.0, 1.0, 0.5], wraps: &[false, false, true], groups: &[0, 0, 1], stretch: 2f64.sqrt() };
+    /// let se2 = EuclideanBound {
+    ///     weights: &[1.0, 1.0, 0.5],
+    ///     wraps: &[false, false, true],
+    ///     groups: &[0, 0, 1],
+    ///     stretch: 2f64.sqrt(),
+    /// };
     /// assert_eq!(se2.lower(&[0.0, 0.0, 0.0], &[3.0, 4.0, 1.0]), 5.5);
     /// assert!(se2.distance(&[0.0, 0.0, 0.0], &[3.0, 4.0, 1.0]) < 5.5);
     /// ```
