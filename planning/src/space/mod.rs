@@ -310,9 +310,9 @@ pub trait Space: Send + Sync {
 /// Nearest-neighbour search ([`NearestNeighbors`](crate::nn::NearestNeighbors)) prunes with
 /// `E` (and, for a k-d tree's boxes, `L`) as a lower bound and decides with the space's own
 /// distance, so its answers stay exact; the tighter the bound, the more it prunes. A bound
-/// with weights that are not finite and non-negative, of another length than the space, with
-/// more than 32 coordinates, or a stretch below 1 or not finite is ignored (the search then
-/// relies on the triangle inequality).
+/// with weights that are not finite and non-negative, weights or groups of another length
+/// than the space, or a stretch below 1 or not finite is ignored, as is any bound of a space
+/// of more than 32 coordinates (the search then relies on the triangle inequality).
 ///
 /// [`lower`]: EuclideanBound::lower
 ///
@@ -384,7 +384,6 @@ impl EuclideanBound<'_> {
     /// documentation).
     pub(crate) fn usable(&self, dim: usize) -> bool {
         self.weights.len() == dim
-            && dim <= 32
             && (self.wraps.is_empty() || self.wraps.len() == dim)
             && (self.groups.is_empty() || self.groups.len() == dim)
             && self.weights.iter().all(|w| w.is_finite() && *w >= 0.0)

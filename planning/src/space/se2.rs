@@ -42,9 +42,9 @@ const GROUPS: [u8; 3] = [0, 0, 1];
 pub struct Se2Space {
     lower: [f64; 3],
     upper: [f64; 3],
-    yaw_weight: f64,
-    /// `[1, 1, yaw_weight]`: the weights of the Euclidean bound on the distance.
-    bound_weights: [f64; 3],
+    /// `[1, 1, yaw weight]`: the yaw weight, and the weights of the distance's Euclidean
+    /// bound.
+    weights: [f64; 3],
 }
 
 impl Se2Space {
@@ -85,8 +85,7 @@ impl Se2Space {
         Ok(Self {
             lower: [lower[0], lower[1], -PI],
             upper: [upper[0], upper[1], PI],
-            yaw_weight: Self::DEFAULT_YAW_WEIGHT,
-            bound_weights: [1.0, 1.0, Self::DEFAULT_YAW_WEIGHT],
+            weights: [1.0, 1.0, Self::DEFAULT_YAW_WEIGHT],
         })
     }
 
@@ -107,8 +106,7 @@ impl Se2Space {
                 value: weight,
             });
         }
-        self.yaw_weight = weight;
-        self.bound_weights[2] = weight;
+        self.weights[2] = weight;
         Ok(self)
     }
 
@@ -123,7 +121,7 @@ impl Se2Space {
     /// # Ok::<(), hearth_planning::space::SpaceError>(())
     /// ```
     pub fn yaw_weight(&self) -> f64 {
-        self.yaw_weight
+        self.weights[2]
     }
 }
 
@@ -146,7 +144,7 @@ impl Space for Se2Space {
         debug_assert_eq!(a.len(), 3);
         debug_assert_eq!(b.len(), 3);
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        (dx * dx + dy * dy).sqrt() + self.yaw_weight * wrap_angle(b[2] - a[2]).abs()
+        (dx * dx + dy * dy).sqrt() + self.weights[2] * wrap_angle(b[2] - a[2]).abs()
     }
 
     #[inline]
@@ -212,7 +210,7 @@ impl Space for Se2Space {
     /// their squares). Its two groups, translation and yaw, make `L` the distance itself.
     fn euclidean_bound(&self) -> Option<EuclideanBound<'_>> {
         Some(EuclideanBound {
-            weights: &self.bound_weights,
+            weights: &self.weights,
             wraps: &WRAPS,
             groups: &GROUPS,
             stretch: std::f64::consts::SQRT_2,
