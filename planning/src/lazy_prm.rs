@@ -217,8 +217,10 @@ struct Roadmap {
     to_target_of: Option<(u64, Vec<u32>)>,
     /// Edges added to the roadmap so far.
     edges_added: u64,
-    /// Neighbour ids of the vertex being added (reused, so adding allocates only its edges).
+    /// Neighbour ids of the vertex being added or connected, and a copy of the connected
+    /// vertex's state (reused, so adding allocates only its edges and connecting nothing).
     near: Vec<usize>,
+    query: Vec<f64>,
     /// The start's and the goals' parts of the roadmap while they are wedged (empty when not).
     wedged: [Vec<u32>; 2],
     /// An index of each wedged part's states (its ids are positions in `wedged[side]`).
@@ -356,6 +358,7 @@ impl Roadmap {
             fresh: Vec::new(),
             edges_added: 0,
             near: Vec::new(),
+            query: Vec::new(),
             wedged: [Vec::new(), Vec::new()],
             wedged_nn: [NearestNeighbors::new(dim), NearestNeighbors::new(dim)],
             seen: Vec::new(),
@@ -457,7 +460,9 @@ impl Roadmap {
             return i as u32;
         }
         let v = self.nn.insert(q) as u32;
-        let mut adjacent = Vec::with_capacity(near.len());
+        // Room for the edges of later vertices too (about as many again), so that a list is
+        // allocated once rather than grown as the roadmap fills in around its vertex.
+        let mut adjacent = Vec::with_capacity(2 * near.len());
         for &u in &near {
             let d = space.distance(self.nn.state(u), q);
             if d <= range {
@@ -475,8 +480,11 @@ impl Roadmap {
     /// Joins `v` to those of its `k` nearest vertices within `range` that it is not joined to
     /// yet (and whose edge was not found invalid).
     fn connect<S: Space>(&mut self, space: &S, v: u32, k: usize, range: f64) {
-        let q = self.nn.state(v as usize).to_vec();
-        for u in self.nn.k_nearest(space, &q, k.saturating_add(1)) {
+        let (mut q, mut near) = (std::mem::take(&mut self.query), std::mem::take(&mut self.near));
+        q.clear();
+        q.extend_from_slice(self.nn.state(v as usize));
+        self.nn.k_nearest_into(space, &q, k.saturating_add(1), &mut near);
+        for &u in &near {
             let u = u as u32;
             if u == v
                 || self.adjacency[v as usize].iter().any(|&(w, _)| w == u)
@@ -492,6 +500,7 @@ impl Roadmap {
                 self.edges_added += 1;
             }
         }
+        (self.query, self.near) = (q, near);
     }
 
     /// Removes an edge found invalid; both its ends become centres of node enhancement (a

@@ -21,7 +21,9 @@
 //! Insertion follows the logarithmic method (Bentley–Saxe): new states go into a small
 //! buffer that is scanned linearly; a full buffer is merged with the equal-sized trees into a
 //! new tree, so every state is re-indexed `O(log n)` times and a query visits `O(log n)`
-//! trees.
+//! trees. A merge builds the new k-d tree in the arrays of the trees it retires, so a growing
+//! index allocates only when it reaches a new size, as a growing vector does, and queries
+//! never allocate (`planning/tests/allocations.rs` counts both).
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -37,6 +39,9 @@ const BUFFER: usize = 32;
 /// Buffers of at least this many states are scanned in lanes ([`BufferLanes`]); smaller ones
 /// cost less state by state.
 const BUFFER_SCAN: usize = 5;
+/// Retired k-d trees kept for their arrays ([`NearestNeighbors::flush`]): more than the
+/// trees of an index of 2³² states can need at once.
+const SPARE_TREES: usize = 40;
 /// Most states in a tree leaf.
 const LEAF: usize = 8;
 /// Entries of a search's stack: more than the height + 1 of any tree over u32 ids.
@@ -96,6 +101,11 @@ pub struct NearestNeighbors {
     trees: Vec<Tree>,
     /// The k-nearest query's heap, kept between queries so that a query does not allocate.
     heap: BinaryHeap<Entry>,
+    /// Retired k-d trees, whose arrays the next rebuilds fill again: once the trees have
+    /// reached a size, merging them allocates nothing (at most [`SPARE_TREES`] kept).
+    spare: Vec<KdTree>,
+    /// The ids of the states a rebuild merges, kept between rebuilds.
+    merging: Vec<u32>,
 }
 
 impl NearestNeighbors {
@@ -118,6 +128,8 @@ impl NearestNeighbors {
             buffer_lanes: BufferLanes::default(),
             trees: Vec::new(),
             heap: BinaryHeap::new(),
+            spare: Vec::new(),
+            merging: Vec::new(),
         }
     }
 
@@ -298,34 +310,56 @@ impl NearestNeighbors {
         ids.append(&mut self.buffer);
         ids.retain(|&i| !self.removed[i as usize]);
         ids.sort_unstable();
-        self.index(space, ids);
+        self.index(space, &mut ids);
     }
 
-    /// Indexes a full buffer: merges it with the trees of equal size into one new tree.
+    /// Indexes a full buffer: merges it with the trees of equal size into one new tree. The
+    /// merged k-d trees' arrays are kept for later rebuilds ([`NearestNeighbors::spare`]), so
+    /// the rebuilds of a growing index allocate only when it reaches a new size, as a growing
+    /// vector does.
     fn flush<S: Space>(&mut self, space: &S) {
         if self.buffer.len() < BUFFER {
             return;
         }
-        let mut ids = std::mem::take(&mut self.buffer);
+        let mut ids = std::mem::take(&mut self.merging);
+        ids.clear();
+        ids.append(&mut self.buffer);
         while self.trees.last().is_some_and(|t| t.len() <= ids.len()) {
-            let t = self.trees.pop().expect("checked above");
-            ids.extend(t.into_ids());
+            match self.trees.pop().expect("checked above") {
+                Tree::Kd(t) => {
+                    ids.extend_from_slice(&t.ids);
+                    self.spare.push(t);
+                }
+                t @ Tree::Vp(_) => ids.extend(t.into_ids()),
+            }
         }
         // Drop removed states while rebuilding.
         ids.retain(|&i| !self.removed[i as usize]);
-        self.index(space, ids);
+        self.index(space, &mut ids);
+        self.merging = ids;
     }
 
-    /// Builds one tree over the live states `ids` (none for no ids) and starts an empty buffer.
-    fn index<S: Space>(&mut self, space: &S, ids: Vec<u32>) {
+    /// Builds one tree over the live states `ids` (none for no ids; `ids` is reordered) and
+    /// starts an empty buffer.
+    fn index<S: Space>(&mut self, space: &S, ids: &mut [u32]) {
         if !ids.is_empty() {
             let tree = match weighted_metric(space, self.dim) {
-                Some(bound) => Tree::Kd(KdTree::build(&self.states, self.dim, bound, ids)),
-                None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids)),
+                Some(bound) => {
+                    // The spare tree with the most room: the largest rebuild takes the largest.
+                    let roomiest = (0..self.spare.len()).max_by_key(|&k| self.spare[k].ids.capacity());
+                    let shell = roomiest.map(|k| self.spare.swap_remove(k));
+                    Tree::Kd(KdTree::build(&self.states, self.dim, bound, ids, shell))
+                }
+                None => Tree::Vp(VpTree::build(space, &self.states, self.dim, ids.to_vec())),
             };
             self.trees.push(tree);
         }
-        self.buffer = Vec::with_capacity(BUFFER);
+        if self.spare.len() > SPARE_TREES {
+            // Keep the roomiest.
+            self.spare.sort_unstable_by_key(|t| std::cmp::Reverse(t.ids.capacity()));
+            self.spare.truncate(SPARE_TREES);
+        }
+        self.buffer.clear();
         self.buffer_lanes.written = 0;
     }
 
@@ -784,34 +818,51 @@ struct KdTree {
 }
 
 impl KdTree {
-    fn build(states: &[f64], dim: usize, bound: EuclideanBound<'_>, mut ids: Vec<u32>) -> Self {
+    /// A tree over the states `ids` (reordered), in the arrays of `shell` (a retired tree,
+    /// whose contents are all replaced) when given.
+    fn build(states: &[f64], dim: usize, bound: EuclideanBound<'_>, ids: &mut [u32], shell: Option<Self>) -> Self {
         let EuclideanBound {
             weights,
             wraps,
             groups,
             stretch,
         } = bound;
-        let wraps = if wraps.contains(&true) {
-            wraps.to_vec()
-        } else {
-            Vec::new()
-        };
-        let mut tree = Self {
-            ids: Vec::with_capacity(ids.len()),
+        let mut tree = shell.unwrap_or_else(|| Self {
+            ids: Vec::new(),
             stretch,
-            groups: dense_groups(groups),
-            points: Vec::with_capacity(ids.len() * dim),
+            groups: Vec::new(),
+            points: Vec::new(),
             nodes: Vec::new(),
-            weights: weights.to_vec(),
-            periods: wraps.iter().map(|&w| if w { TAU } else { f64::INFINITY }).collect(),
-            wraps,
+            weights: Vec::new(),
+            periods: Vec::new(),
+            wraps: Vec::new(),
             boxes: Vec::new(),
             lanes: Vec::new(),
             lane_periods: Vec::new(),
             reach: 0.0,
             diagonal2: 0.0,
-        };
-        tree.build_node(states, dim, &mut ids);
+        });
+        tree.stretch = stretch;
+        tree.reach = 0.0;
+        tree.diagonal2 = 0.0;
+        for v in [&mut tree.weights, &mut tree.periods, &mut tree.boxes, &mut tree.points] {
+            v.clear();
+        }
+        tree.ids.clear();
+        tree.nodes.clear();
+        tree.lanes.clear();
+        tree.lane_periods.clear();
+        tree.ids.reserve(ids.len());
+        tree.points.reserve(ids.len() * dim);
+        dense_groups_into(groups, &mut tree.groups);
+        tree.weights.extend_from_slice(weights);
+        tree.wraps.clear();
+        if wraps.contains(&true) {
+            tree.wraps.extend_from_slice(wraps);
+            tree.periods
+                .extend(wraps.iter().map(|&w| if w { TAU } else { f64::INFINITY }));
+        }
+        tree.build_node(states, dim, ids);
         for k in 0..tree.ids.len() {
             let i = tree.ids[k] as usize;
             for axis in 0..dim {
@@ -855,7 +906,8 @@ impl KdTree {
         }
         self.reach = reach;
         let blocks = self.ids.len().div_ceil(LANES);
-        self.lanes = vec![f32::NAN; blocks * dim * LANES];
+        self.lanes.clear();
+        self.lanes.resize(blocks * dim * LANES, f32::NAN);
         for (k, p) in self.points.chunks_exact(dim).enumerate() {
             let block = &mut self.lanes[(k / LANES) * dim * LANES..][..dim * LANES];
             for (axis, (&x, &w)) in p.iter().zip(&self.weights).enumerate() {
@@ -867,7 +919,9 @@ impl KdTree {
     /// Fills `boxes`: children come after their parent in `nodes`, so one backward pass sees
     /// every child's box before its parent's.
     fn build_boxes(&mut self, dim: usize) {
-        let mut boxes = vec![0.0; self.nodes.len() * 2 * dim];
+        let mut boxes = std::mem::take(&mut self.boxes);
+        boxes.clear();
+        boxes.resize(self.nodes.len() * 2 * dim, 0.0);
         for n in (0..self.nodes.len()).rev() {
             let (done, rest) = boxes.split_at_mut((n + 1) * 2 * dim);
             let (lo, hi) = done[n * 2 * dim..].split_at_mut(dim);
@@ -1189,21 +1243,28 @@ fn weighted_metric<S: Space>(space: &S, dim: usize) -> Option<EuclideanBound<'_>
     space.euclidean_bound().filter(|b| dim <= KD_MAX_DIM && b.usable(dim))
 }
 
-/// `groups` numbered from 0 in order of first appearance (empty when they name one group or
-/// none), so that a k-d tree can sum them in an array of [`KD_MAX_DIM`] entries.
-fn dense_groups(groups: &[u8]) -> Vec<u8> {
-    let mut seen: Vec<u8> = Vec::new();
-    let dense: Vec<u8> = groups
-        .iter()
-        .map(|g| match seen.iter().position(|s| s == g) {
-            Some(k) => k as u8,
+/// `groups` numbered from 0 in order of first appearance, written into `dense` (left empty
+/// when they name one group or none), so that a k-d tree can sum them in an array of
+/// [`KD_MAX_DIM`] entries.
+fn dense_groups_into(groups: &[u8], dense: &mut Vec<u8>) {
+    // At most 256 groups (`u8`); a stack array keeps a rebuild from allocating.
+    let mut seen = [0u8; 256];
+    let mut count = 0usize;
+    dense.clear();
+    for g in groups {
+        let k = match seen[..count].iter().position(|s| s == g) {
+            Some(k) => k,
             None => {
-                seen.push(*g);
-                (seen.len() - 1) as u8
+                seen[count] = *g;
+                count += 1;
+                count - 1
             }
-        })
-        .collect();
-    if seen.len() > 1 { dense } else { Vec::new() }
+        };
+        dense.push(k as u8);
+    }
+    if count <= 1 {
+        dense.clear();
+    }
 }
 
 /// `q` with the coordinates that `wraps` marks wrapped into `(−π, π]` (the first `q.len()`

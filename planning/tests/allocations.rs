@@ -1,0 +1,337 @@
+//! Hot loops do not allocate: a counting global allocator (this test binary only) counts the
+//! heap allocations each thread makes, and the loops a planner runs millions of times (a
+//! state check, an edge check, a nearest-neighbour query, sampling a trajectory) must make
+//! none once their scratch space is warm. A whole plan may allocate only as its trees and
+//! roadmaps grow: amortised, a few allocations per hundred iterations.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+
+use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_planning::motion::MotionValidator;
+use hearth_planning::nn::NearestNeighbors;
+use hearth_planning::problem::ProblemSet;
+use hearth_planning::space::{JointSpace, Space};
+use hearth_planning::trajectory::{Limits, Trajectory};
+use hearth_planning::validity::{RobotValidity, StateValidator};
+use hearth_planning::{BiRrt, Budget, Goal, LazyPrm, PlanError, PlanRequest, Planner, Rrt};
+use rand::SeedableRng;
+use rand_pcg::Pcg64Mcg;
+
+/// The system allocator, counting each thread's allocations and reallocations.
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn count() {
+    // `try_with`: a thread's last deallocations can run after its counter is gone.
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+// SAFETY: every call is passed on to `System` unchanged; counting touches only a
+// thread-local `Cell` with a constant initialiser, which never allocates.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: the caller's contract is `System::alloc`'s.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: as above.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        // SAFETY: as above.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as above.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// The allocations this thread makes while running `f`, and `f`'s result.
+fn allocations<T>(f: impl FnOnce() -> T) -> (u64, T) {
+    let before = ALLOCATIONS.with(Cell::get);
+    let out = f();
+    (ALLOCATIONS.with(Cell::get) - before, out)
+}
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+}
+
+fn matrix(robot: &str) -> SelfCollisionMatrix {
+    static PANDA: OnceLock<SelfCollisionMatrix> = OnceLock::new();
+    static FETCH: OnceLock<SelfCollisionMatrix> = OnceLock::new();
+    let cell = if robot == "panda" { &PANDA } else { &FETCH };
+    cell.get_or_init(|| {
+        let m = RobotModel::builtin(robot).unwrap();
+        SelfCollisionMatrix::compute(
+            &m,
+            &SelfCollisionSettings {
+                samples: 300,
+                ..Default::default()
+            },
+        )
+    })
+    .clone()
+}
+
+/// A robot's planning chain among the obstacles of the first problem of its
+/// MotionBenchMaker excerpt, fingers where the benchmark holds them, and a request from the
+/// problem's start to its first goal our model admits (the Fetch's excerpt has none: torso
+/// against shoulder, see the pipeline tests), else to the first valid state drawn with a fixed
+/// seed.
+fn world(robot: &str) -> (JointSpace, RobotValidity, PlanRequest) {
+    let m = RobotModel::builtin(robot).unwrap();
+    let (file, finger, width) = match robot {
+        "panda" => ("panda_table_pick.json", "panda_finger_joint1", 0.04),
+        _ => ("fetch_table_pick.json", "r_gripper_finger_joint", 0.05),
+    };
+    let set = ProblemSet::load(data(file)).unwrap();
+    let chain = Chain::new(&m, &set.joint_names).unwrap();
+    let space = JointSpace::from_chain(&chain).unwrap();
+    let p = set.valid_problems().next().unwrap();
+    let mut v = RobotValidity::new(chain, matrix(robot), Arc::new(p.scene()));
+    let mut reference = m.neutral_configuration();
+    Chain::new(&m, &[finger]).unwrap().scatter(&[width], &mut reference);
+    v.set_reference(&reference).unwrap();
+    assert!(v.is_valid(&p.start), "{robot}: the start is valid");
+    let goal = p.goals.iter().find(|g| v.is_valid(g)).cloned().unwrap_or_else(|| {
+        let mut rng = Pcg64Mcg::seed_from_u64(1);
+        let mut q = vec![0.0; space.dim()];
+        loop {
+            space.sample(&mut rng, &mut q);
+            if v.is_valid(&q) {
+                break q.clone();
+            }
+        }
+    });
+    (space, v, PlanRequest::new(p.start.clone(), Goal::Config(goal)))
+}
+
+/// `n` random states of `space`, drawn with a fixed seed.
+fn states(space: &JointSpace, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let mut q = vec![0.0; space.dim()];
+            space.sample(&mut rng, &mut q);
+            q
+        })
+        .collect()
+}
+
+/// State and edge checks of `robot` make no allocation once warm, in free space, in contact
+/// and in self-collision alike. The first check that lands in a cell of a self-collision
+/// certificate table fills that cell (a one-off per cell, as `warm_pair_tables` does ahead of
+/// time), so the counted pass goes over states and edges checked once before.
+fn checks_do_not_allocate(robot: &str) {
+    let (space, mut v, request) = world(robot);
+    let qs = states(&space, 2_000, 7);
+    let goal = request.goal.states()[0].clone();
+    let mut motions = MotionValidator::new(space.clone(), 1.0 / 32.0);
+    let mut pass = |v: &mut RobotValidity| {
+        let valid = qs.iter().filter(|q| v.is_valid(q)).count();
+        let free = qs.windows(2).filter(|p| motions.check_motion(v, &p[0], &p[1])).count();
+        v.is_valid(&request.start);
+        v.is_valid(&goal);
+        motions.check_motion(v, &request.start, &goal);
+        (valid, free)
+    };
+    let warm = pass(&mut v);
+    let (n, (valid, free)) = allocations(|| pass(&mut v));
+    assert_eq!((valid, free), warm, "{robot}: the same answers in both passes");
+    assert!(
+        valid > 0 && valid < qs.len(),
+        "{robot}: the states mix free and colliding ({valid})"
+    );
+    assert!(free > 0, "{robot}: some random edges are free");
+    assert_eq!(
+        n,
+        0,
+        "{robot}: {} state and edge checks allocated {n} times",
+        2 * qs.len()
+    );
+}
+
+#[test]
+fn panda_checks_do_not_allocate() {
+    checks_do_not_allocate("panda");
+}
+
+#[test]
+fn fetch_checks_do_not_allocate() {
+    checks_do_not_allocate("fetch");
+}
+
+#[test]
+fn nearest_neighbour_queries_do_not_allocate() {
+    let (space, _, _) = world("panda");
+    let qs = states(&space, 5_000, 11);
+    let mut nn = NearestNeighbors::new(space.dim());
+    for q in &qs[..4_000] {
+        nn.insert(q);
+    }
+    let mut out = Vec::with_capacity(16);
+    // The first query after inserts builds the index; later ones only search it.
+    nn.nearest(&space, &qs[4_000]);
+    nn.k_nearest_into(&space, &qs[4_000], 10, &mut out);
+    let (n, found) = allocations(|| {
+        let mut found = 0;
+        for q in &qs[4_000..] {
+            found += usize::from(nn.nearest(&space, q).is_some());
+            nn.k_nearest_into(&space, q, 10, &mut out);
+            found += out.len();
+        }
+        found
+    });
+    assert_eq!(found, 1_000 * 11);
+    assert_eq!(n, 0, "1,000 nearest and 10-nearest queries allocated {n} times");
+}
+
+#[test]
+fn sampling_a_trajectory_does_not_allocate() {
+    let (space, _, request) = world("panda");
+    let path = hearth_planning::Path {
+        states: vec![request.start.clone(), request.goal.states()[0].clone()],
+    };
+    let limits = Limits::new(vec![2.0; 7], vec![10.0; 7], vec![5_000.0; 7]).unwrap();
+    let t = Trajectory::rest_to_rest(&space, &path, &limits).unwrap();
+    let smooth = t.with_jerk_limits(&limits).unwrap();
+    let (mut q, mut qd) = ([0.0; 7], [0.0; 7]);
+    let (n, _) = allocations(|| {
+        for i in 0..=1_000 {
+            let s = f64::from(i) / 1_000.0;
+            t.sample(s * t.duration(), &mut q, Some(&mut qd));
+            smooth.sample(s * smooth.duration(), &mut q, Some(&mut qd));
+        }
+    });
+    assert_eq!(n, 0, "sampling trajectories allocated {n} times");
+}
+
+/// A 2-D square in which only the two query ends are free (`Boxed`) or which a wall at
+/// x ∈ [0.45, 0.55] splits with no way through: no plan succeeds, so a plan runs its whole
+/// iteration budget.
+#[derive(Clone, Copy)]
+enum Square {
+    Boxed,
+    Walled,
+}
+
+const START: [f64; 2] = [0.1, 0.1];
+const GOAL: [f64; 2] = [0.9, 0.1];
+
+impl StateValidator for Square {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        match self {
+            Square::Boxed => q == START || q == GOAL,
+            Square::Walled => !(0.45..=0.55).contains(&q[0]),
+        }
+    }
+    fn checks(&self) -> u64 {
+        0
+    }
+}
+
+/// The allocations of a plan of `planner` in `world` within `iterations`, and the states its
+/// trees or roadmap hold at the end.
+fn square_plan<P: Planner<JointSpace>>(planner: &mut P, mut world: Square, iterations: u64) -> (u64, usize) {
+    let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false]).unwrap();
+    let mut motions = MotionValidator::new(space, 0.005);
+    let request = PlanRequest::new(START.to_vec(), Goal::Config(GOAL.to_vec()));
+    let mut rng = Pcg64Mcg::seed_from_u64(3);
+    let budget = Budget::iterations(iterations);
+    let (n, result) = allocations(|| planner.plan(&mut motions, &mut world, &request, &budget, &mut rng));
+    match result {
+        Err(PlanError::Timeout { stats }) => (n, stats.tree_sizes.iter().sum()),
+        other => panic!("no way through: {other:?}"),
+    }
+}
+
+/// A planner's loop allocates nothing in iterations that add no state (20,000 iterations in
+/// the boxed square add at most a few allocations: the pocket escape's helpers), and as its
+/// trees or roadmap grow, at most `per_state` per state added (amortised: an index's arrays
+/// or a vector reaching a new size, a roadmap vertex's list of edges).
+fn plans_allocate_as_they_grow<P: Planner<JointSpace>>(label: &str, mut make: impl FnMut() -> P, per_state: f64) {
+    let (short, _) = square_plan(&mut make(), Square::Boxed, 1_000);
+    let (long, _) = square_plan(&mut make(), Square::Boxed, 21_000);
+    println!("{label}, boxed: {short} allocations within 1,000 iterations, {long} within 21,000");
+    assert!(
+        long <= short + 32,
+        "{label}: 20,000 iterations that add no state allocated {} times",
+        long.saturating_sub(short)
+    );
+    let (short, a) = square_plan(&mut make(), Square::Walled, 1_000);
+    let (long, b) = square_plan(&mut make(), Square::Walled, 21_000);
+    println!(
+        "{label}, walled: {short} allocations within 1,000 iterations ({a} states), {long} within 21,000 ({b} states)"
+    );
+    let (extra, added) = (long.saturating_sub(short), b.saturating_sub(a));
+    assert!(
+        added > 1_000,
+        "{label}: the trees grow in the walled square ({a} → {b} states)"
+    );
+    assert!(
+        extra as f64 <= per_state * added as f64,
+        "{label}: {extra} allocations for {added} more states"
+    );
+}
+
+#[test]
+fn birrt_allocates_as_its_trees_grow() {
+    plans_allocate_as_they_grow("BiRRT", BiRrt::default, 0.05);
+}
+
+#[test]
+fn rrt_allocates_as_its_tree_grows() {
+    plans_allocate_as_they_grow("RRT", Rrt::default, 0.05);
+}
+
+/// A roadmap keeps a list of edges per vertex: one allocation per vertex, and now and then
+/// another when a list outgrows the room it was given.
+#[test]
+fn lazy_prm_allocates_as_its_roadmap_grows() {
+    plans_allocate_as_they_grow("LazyPRM", LazyPrm::default, 1.6);
+}
+
+/// A plan on a robot allocates what it returns (a vector per path state), its set-up and its
+/// trees' growth: counted on a second plan with the same seed, after the first filled the
+/// self-collision certificates its checks land in.
+#[test]
+fn robot_plans_allocate_little() {
+    for robot in ["panda", "fetch"] {
+        let (space, mut v, request) = world(robot);
+        let mut motions = MotionValidator::new(space, 1.0 / 32.0);
+        let mut plan = || {
+            let mut rng = Pcg64Mcg::seed_from_u64(3);
+            allocations(|| {
+                BiRrt::default().plan(&mut motions, &mut v, &request, &Budget::iterations(100_000), &mut rng)
+            })
+        };
+        let (_, first) = plan();
+        let (n, second) = plan();
+        let (first, second) = (first.unwrap(), second.unwrap_or_else(|e| panic!("{robot}: {e}")));
+        assert_eq!(first.path, second.path, "{robot}: same seed, same plan");
+        let states = second.path.states.len() as u64;
+        let grown: usize = second.stats.tree_sizes.iter().sum();
+        println!(
+            "{robot}: {n} allocations in a plan of {} iterations, {grown} tree states and {states} path states",
+            second.stats.iterations
+        );
+        assert!(
+            n <= 64 + 2 * states + grown as u64 / 4,
+            "{robot}: {n} allocations for a path of {states} states and trees of {grown}"
+        );
+    }
+}
