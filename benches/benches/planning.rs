@@ -365,6 +365,24 @@ fn nearest_neighbours(c: &mut Criterion) {
             black_box(nn.k_nearest(&fetch, &queries[i], 10))
         })
     });
+    // A tree growing from nothing to 4,000 of the Fetch's states, one nearest query before
+    // each insert as a tree planner makes them: the index's rebuilds as it grows.
+    let states: Vec<[f64; 8]> = (0..4_000)
+        .map(|_| {
+            fetch.sample(&mut rng, &mut q);
+            q
+        })
+        .collect();
+    g.bench_function("grow_4k_fetch", |b| {
+        b.iter(|| {
+            let mut nn = NearestNeighbors::new(8);
+            for s in &states {
+                black_box(nn.nearest(&fetch, s));
+                nn.insert(s);
+            }
+            nn
+        })
+    });
     g.finish();
 }
 
