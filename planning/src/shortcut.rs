@@ -38,7 +38,7 @@ use crate::error::PlanError;
 use crate::motion::{MotionValidator, checked_resolution};
 use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
 use crate::space::{Space, steer};
-use crate::trajectory::{Limits, Trajectory, TrajectoryError};
+use crate::trajectory::{Limits, Ramps, Trajectory, TrajectoryError};
 use crate::validity::StateValidator;
 
 /// Parabolic shortcut attempts between fine checks.
@@ -198,8 +198,8 @@ fn cumulative<S: Space>(space: &S, states: &[Vec<f64>]) -> Vec<f64> {
     acc
 }
 
-/// The point at arc length `u` along a path: `(edge index, state)`.
-fn point_at<S: Space>(space: &S, states: &[Vec<f64>], acc: &[f64], u: f64) -> (usize, Vec<f64>) {
+/// The point at arc length `u` along a path, written into `q`; returns the index of its edge.
+fn point_at<S: Space>(space: &S, states: &[Vec<f64>], acc: &[f64], u: f64, q: &mut [f64]) -> usize {
     let i = acc.partition_point(|&a| a <= u).saturating_sub(1).min(states.len() - 2);
     let len = acc[i + 1] - acc[i];
     let t = if len > 0.0 {
@@ -207,9 +207,8 @@ fn point_at<S: Space>(space: &S, states: &[Vec<f64>], acc: &[f64], u: f64) -> (u
     } else {
         0.0
     };
-    let mut q = vec![0.0; space.dim()];
-    space.interpolate(&states[i], &states[i + 1], t, &mut q);
-    (i, q)
+    space.interpolate(&states[i], &states[i + 1], t, q);
+    i
 }
 
 /// Random shortcutting of a geometric path: connects random pairs of points (half the time
@@ -257,13 +256,15 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let space = motion.space().clone();
     // Arc lengths change only when a shortcut is accepted.
     let mut acc = cumulative(&space, &states);
+    // The shortcut's ends, kept between attempts: an attempt that fails allocates nothing.
+    let (mut a, mut b) = (vec![0.0; space.dim()], vec![0.0; space.dim()]);
     for _ in 0..settings.attempts {
         if states.len() < 3 || clock.expired() {
             break;
         }
         stats.attempts += 1;
         let total = *acc.last().unwrap_or(&0.0);
-        let (i, a, j, b) = if rng.random_bool(0.5) {
+        let (i, j) = if rng.random_bool(0.5) {
             let (mut x, mut y) = (rng.random_range(0..states.len()), rng.random_range(0..states.len()));
             if x > y {
                 std::mem::swap(&mut x, &mut y);
@@ -271,18 +272,24 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
             if y < x + 2 {
                 continue;
             }
-            (x, states[x].clone(), y - 1, states[y].clone())
+            a.clear();
+            a.extend_from_slice(&states[x]);
+            b.clear();
+            b.extend_from_slice(&states[y]);
+            (x, y - 1)
         } else {
             let (mut u, mut w) = (rng.random::<f64>() * total, rng.random::<f64>() * total);
             if u > w {
                 std::mem::swap(&mut u, &mut w);
             }
-            let (i, a) = point_at(&space, &states, &acc, u);
-            let (j, b) = point_at(&space, &states, &acc, w);
+            a.resize(space.dim(), 0.0);
+            b.resize(space.dim(), 0.0);
+            let i = point_at(&space, &states, &acc, u, &mut a);
+            let j = point_at(&space, &states, &acc, w, &mut b);
             if i == j {
                 continue;
             }
-            (i, a, j, b)
+            (i, j)
         };
         let along = space.distance(&a, &states[i + 1]) + (acc[j] - acc[i + 1]) + space.distance(&states[j], &b);
         if space.distance(&a, &b) >= along - 1e-9 {
@@ -299,10 +306,10 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         let mut next = Vec::with_capacity(states.len());
         next.extend_from_slice(&states[..=i]);
         if space.distance(&a, &states[i]) > 0.0 {
-            next.push(a);
+            next.push(a.clone());
         }
         if space.distance(&b, &states[j + 1]) > 0.0 {
-            next.push(b);
+            next.push(b.clone());
         }
         next.extend_from_slice(&states[j + 1..]);
         states = next;
@@ -366,9 +373,11 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         });
     }
     let clock = Clock::new(settings.time_limit);
-    let ramp_limits = limits.without_jerk();
+    let mut ramps = Ramps::new(&limits.without_jerk());
     let space = motion.space().clone();
     let coarse = motion.resolution();
+    // (A resolution the space cannot use proves no ramp valid.)
+    let coarse_usable = Trajectory::usable_resolution(&space, coarse);
     let mut stats = ShortcutStats::default();
     let (mut q1, mut v1, mut q2, mut v2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut flat = Vec::new();
@@ -391,11 +400,12 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         if t2 - t1 >= 1e-3 * total {
             trajectory.sample(t1, &mut q1, Some(&mut v1));
             trajectory.sample(t2, &mut q2, Some(&mut v2));
-            if let Ok(ramp) = Trajectory::ramp(&q1, &v1, &q2, &v2, &ramp_limits)
-                && ramp.duration() < t2 - t1 - 1e-6
-                && ramp.is_valid(&space, validator, coarse, &mut flat)
+            if let Some(duration) = ramps.compute(&q1, &v1, &q2, &v2)
+                && duration < t2 - t1 - 1e-6
+                && coarse_usable
+                && ramps.is_valid(&space, validator, coarse, &mut flat)
             {
-                trajectory.splice_trajectory(t1, t2, ramp);
+                trajectory.splice_trajectory(t1, t2, ramps.take());
                 round_accepted += 1;
             }
         }

@@ -173,14 +173,30 @@ fn bisect_first_invalid<V: StateValidator + ?Sized>(validator: &mut V, flat: &[f
         heap.resize(BATCH * dim, 0.0);
         &mut heap[..]
     };
-    let mut queue = std::collections::VecDeque::with_capacity(64);
-    queue.push_back((0usize, n - 1));
+    // The intervals still to split, first in first out (coarse to fine): a ring, on the stack
+    // for up to 256 states. The intervals it holds at once share at most their ends, and each
+    // spans at least one step (or is the one state), so there are at most `n` of them.
+    let mut ring_stack = [(0usize, 0usize); 256];
+    let mut ring_heap = Vec::new();
+    let ring = if n <= ring_stack.len() {
+        &mut ring_stack[..]
+    } else {
+        ring_heap.resize(n, (0, 0));
+        &mut ring_heap[..]
+    };
+    ring[0] = (0usize, n - 1);
+    let (mut head, mut queued) = (0usize, 1usize);
     let mids = std::iter::from_fn(|| {
-        while let Some((lo, hi)) = queue.pop_front() {
+        while queued > 0 {
+            let (lo, hi) = ring[head];
+            head = (head + 1) % ring.len();
+            queued -= 1;
             if hi - lo >= 2 {
                 let mid = lo + (hi - lo) / 2;
-                queue.push_back((lo, mid));
-                queue.push_back((mid, hi));
+                for half in [(lo, mid), (mid, hi)] {
+                    ring[(head + queued) % ring.len()] = half;
+                    queued += 1;
+                }
                 return Some(mid);
             }
         }

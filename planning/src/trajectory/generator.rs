@@ -43,11 +43,8 @@ fn run(input: &InputParameter<0>, n: usize, sweeps: usize) -> Result<Generated, 
     let mut otg = Ruckig::<0, ThrowErrorHandler>::new(Some(n), 0.001);
     otg.waypoint_refinement_sweeps = sweeps;
     let mut trajectory = Generated::new(Some(n));
-    match otg.calculate(input, &mut trajectory) {
-        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => Ok(trajectory),
-        Ok(other) => Err(TrajectoryError::Generator(format!("{other:?}"))),
-        Err(e) => Err(TrajectoryError::Generator(without_input_dump(&e.to_string()))),
-    }
+    calculate(&mut otg, input, &mut trajectory)?;
+    Ok(trajectory)
 }
 
 /// The generator's error message without the dump of its whole input that follows `input:`
@@ -68,21 +65,69 @@ pub(crate) fn between(
     limits: &Limits,
     sync: Sync,
 ) -> Result<Generated, TrajectoryError> {
-    let n = limits.dim();
-    let mut input = input(limits, limits.position_bounds());
-    input.synchronization = match sync {
-        Sync::Time => Synchronization::Time,
-        Sync::Phase => Synchronization::Phase,
-    };
-    for i in 0..n {
-        input.current_position[i] = q0[i];
-        input.current_velocity[i] = v0[i];
-        input.current_acceleration[i] = 0.0;
-        input.target_position[i] = q1[i];
-        input.target_velocity[i] = v1[i];
-        input.target_acceleration[i] = 0.0;
+    let mut ramps = Ramps::new(limits, sync);
+    let mut out = Generated::new(Some(limits.dim()));
+    ramps.between(q0, v0, q1, v1, &mut out)?;
+    Ok(out)
+}
+
+/// Time-optimal state-to-state motions within fixed limits, one after another, in the same
+/// generator and input: after the first, computing one allocates nothing (as Ruckig is used
+/// in a control loop). The shortcutter's ramps.
+pub(crate) struct Ramps {
+    otg: Ruckig<0, ThrowErrorHandler>,
+    input: InputParameter<0>,
+}
+
+impl Ramps {
+    /// A generator of motions within `limits` (and their position bounds), synchronised by
+    /// `sync`.
+    pub(crate) fn new(limits: &Limits, sync: Sync) -> Self {
+        let mut input = input(limits, limits.position_bounds());
+        input.synchronization = match sync {
+            Sync::Time => Synchronization::Time,
+            Sync::Phase => Synchronization::Phase,
+        };
+        Self {
+            otg: Ruckig::<0, ThrowErrorHandler>::new(Some(limits.dim()), 0.001),
+            input,
+        }
     }
-    run(&input, n, 0)
+
+    /// The motion from `(q0, v0)` to `(q1, v1)` (accelerations zero at both ends), written
+    /// into `out` (a trajectory of the limits' dimension, whatever it held before).
+    pub(crate) fn between(
+        &mut self,
+        q0: &[f64],
+        v0: &[f64],
+        q1: &[f64],
+        v1: &[f64],
+        out: &mut Generated,
+    ) -> Result<(), TrajectoryError> {
+        let input = &mut self.input;
+        for i in 0..q0.len() {
+            input.current_position[i] = q0[i];
+            input.current_velocity[i] = v0[i];
+            input.current_acceleration[i] = 0.0;
+            input.target_position[i] = q1[i];
+            input.target_velocity[i] = v1[i];
+            input.target_acceleration[i] = 0.0;
+        }
+        calculate(&mut self.otg, input, out)
+    }
+}
+
+/// Runs the generator, its errors as [`TrajectoryError::Generator`].
+fn calculate(
+    otg: &mut Ruckig<0, ThrowErrorHandler>,
+    input: &InputParameter<0>,
+    out: &mut Generated,
+) -> Result<(), TrajectoryError> {
+    match otg.calculate(input, out) {
+        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => Ok(()),
+        Ok(other) => Err(TrajectoryError::Generator(format!("{other:?}"))),
+        Err(e) => Err(TrajectoryError::Generator(without_input_dump(&e.to_string()))),
+    }
 }
 
 /// A motion from rest at `waypoints[0]` to rest at the last waypoint that passes through the

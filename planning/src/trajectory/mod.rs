@@ -637,6 +637,12 @@ impl Trajectory {
         Ok(Self::from_pieces(n, vec![Piece::Generated(Box::new(g))]))
     }
 
+    /// Checks `resolution` as [`Trajectory::check`] does, for a caller that checks many
+    /// motions at it ([`Ramps::is_valid`]).
+    pub(crate) fn usable_resolution<S: Space>(space: &S, resolution: f64) -> bool {
+        usable_resolution(space, resolution).is_ok()
+    }
+
     /// Replaces `[t1, t2]` by `other` (one span), which must join the states at both times.
     pub(crate) fn splice_trajectory(&mut self, t1: f64, t2: f64, other: Trajectory) {
         if let Some(span) = other.spans.into_iter().next() {
@@ -675,20 +681,6 @@ impl Trajectory {
             self.spans[i].verified = true;
         }
         true
-    }
-
-    /// Whether every state along the trajectory, at most `resolution` apart, is valid, checked
-    /// coarse to fine; `flat` is scratch space.
-    pub(crate) fn is_valid<S: Space, V: StateValidator + ?Sized>(
-        &self,
-        space: &S,
-        validator: &mut V,
-        resolution: f64,
-        flat: &mut Vec<f64>,
-    ) -> bool {
-        flat.clear();
-        // (A resolution that is not positive and finite proves nothing valid.)
-        self.discretise(space, resolution, flat).is_ok() && first_invalid(flat, self.dim, validator).is_none()
     }
 
     /// Number of coordinates.
@@ -1035,9 +1027,18 @@ fn discretise_timed<S: Space>(
     mut times: Option<&mut Vec<f64>>,
 ) {
     let resolution = resolution_or_default(resolution);
-    let (mut prev, mut q) = (vec![0.0; dim], vec![0.0; dim]);
-    sample(0.0, &mut prev);
-    out.extend_from_slice(&prev);
+    // Two states of scratch, on the stack for up to 32 coordinates.
+    let mut stack = [0.0f64; 64];
+    let mut heap = Vec::new();
+    let both = if dim <= 32 {
+        &mut stack[..2 * dim]
+    } else {
+        heap.resize(2 * dim, 0.0);
+        &mut heap[..]
+    };
+    let (mut prev, mut q) = both.split_at_mut(dim);
+    sample(0.0, prev);
+    out.extend_from_slice(prev);
     if let Some(times) = times.as_deref_mut() {
         times.push(0.0);
     }
@@ -1046,8 +1047,8 @@ fn discretise_timed<S: Space>(
         let mut next = (t + dt).min(duration);
         let mut d;
         loop {
-            sample(next, &mut q);
-            d = space.distance(&prev, &q);
+            sample(next, q);
+            d = space.distance(prev, q);
             if d <= resolution || next - t < 1e-9 {
                 break;
             }
@@ -1057,7 +1058,7 @@ fn discretise_timed<S: Space>(
             dt = (next - t) * if factor.is_nan() { 0.1 } else { factor.clamp(0.1, 0.9) };
             next = t + dt;
         }
-        out.extend_from_slice(&q);
+        out.extend_from_slice(q);
         if let Some(times) = times.as_deref_mut() {
             times.push(next);
         }
@@ -1070,6 +1071,62 @@ fn discretise_timed<S: Space>(
             };
         t = next;
         std::mem::swap(&mut prev, &mut q);
+    }
+}
+
+/// The shortcutter's time-optimal ramps ([`Trajectory::ramp`]), computed one after another in
+/// the same generator and output: computing and checking a ramp allocates nothing; only one
+/// that is taken ([`Ramps::take`]) becomes a trajectory of its own.
+pub(crate) struct Ramps {
+    generator: generator::Ramps,
+    ramp: Generated,
+    dim: usize,
+}
+
+impl Ramps {
+    /// Ramps within `limits` (their jerk limits are the generator's: pass
+    /// [`Limits::without_jerk`] for parabolic ramps).
+    pub(crate) fn new(limits: &Limits) -> Self {
+        Self {
+            generator: generator::Ramps::new(limits, Sync::Time),
+            ramp: Generated::new(Some(limits.dim())),
+            dim: limits.dim(),
+        }
+    }
+
+    /// Computes the ramp from `(q0, v0)` to `(q1, v1)` (of the limits' dimension) and returns
+    /// its duration, or `None` when there is none (the generator fails, or a value is not
+    /// finite).
+    pub(crate) fn compute(&mut self, q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64]) -> Option<f64> {
+        debug_assert!([q0, v0, q1, v1].iter().all(|x| x.len() == self.dim));
+        if [q0, v0, q1, v1].iter().any(|x| x.iter().any(|c| !c.is_finite())) {
+            return None;
+        }
+        self.generator.between(q0, v0, q1, v1, &mut self.ramp).ok()?;
+        Some(self.ramp.get_duration())
+    }
+
+    /// Whether every state along the last computed ramp, at most `resolution` apart, is valid
+    /// (as [`Trajectory::check`] of the ramp as a trajectory would find); `resolution` must be usable
+    /// ([`Trajectory::usable_resolution`]); `flat` is scratch space.
+    pub(crate) fn is_valid<S: Space, V: StateValidator + ?Sized>(
+        &self,
+        space: &S,
+        validator: &mut V,
+        resolution: f64,
+        flat: &mut Vec<f64>,
+    ) -> bool {
+        flat.clear();
+        let ramp = &self.ramp;
+        let sample = |t: f64, q: &mut [f64]| generator::eval(ramp, t, q, None);
+        discretise_timed(self.dim, ramp.get_duration(), sample, space, resolution, flat, None);
+        first_invalid(flat, self.dim, validator).is_none()
+    }
+
+    /// The last computed ramp as a trajectory (the next is computed into a new output).
+    pub(crate) fn take(&mut self) -> Trajectory {
+        let ramp = std::mem::replace(&mut self.ramp, Generated::new(Some(self.dim)));
+        Trajectory::from_pieces(self.dim, vec![Piece::Generated(Box::new(ramp))])
     }
 }
 
