@@ -217,9 +217,10 @@ struct Roadmap {
     to_target_of: Option<(u64, Vec<u32>)>,
     /// Edges added to the roadmap so far.
     edges_added: u64,
-    /// Neighbour ids of the vertex being added or connected, and a copy of the connected
-    /// vertex's state (reused, so adding allocates only its edges and connecting nothing).
+    /// Neighbour ids of the vertex being added or connected (reused, so adding allocates only
+    /// its edges and connecting nothing).
     near: Vec<usize>,
+    /// A copy of the connected vertex's state (reused).
     query: Vec<f64>,
     /// The start's and the goals' parts of the roadmap while they are wedged (empty when not).
     wedged: [Vec<u32>; 2],

@@ -778,7 +778,7 @@ enum KdNode {
 
 /// A static k-d tree over some of the arena's states, for a weighted Euclidean metric or a
 /// metric it bounds ([`EuclideanBound`](crate::space::EuclideanBound)).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 struct KdTree {
     ids: Vec<u32>,
     /// How far the space's distance may exceed the weighted Euclidean one (1: they are equal).
@@ -827,36 +827,13 @@ impl KdTree {
             groups,
             stretch,
         } = bound;
-        let mut tree = shell.unwrap_or_else(|| Self {
-            ids: Vec::new(),
-            stretch,
-            groups: Vec::new(),
-            points: Vec::new(),
-            nodes: Vec::new(),
-            weights: Vec::new(),
-            periods: Vec::new(),
-            wraps: Vec::new(),
-            boxes: Vec::new(),
-            lanes: Vec::new(),
-            lane_periods: Vec::new(),
-            reach: 0.0,
-            diagonal2: 0.0,
-        });
+        let mut tree = shell.unwrap_or_default();
+        tree.clear();
         tree.stretch = stretch;
-        tree.reach = 0.0;
-        tree.diagonal2 = 0.0;
-        for v in [&mut tree.weights, &mut tree.periods, &mut tree.boxes, &mut tree.points] {
-            v.clear();
-        }
-        tree.ids.clear();
-        tree.nodes.clear();
-        tree.lanes.clear();
-        tree.lane_periods.clear();
         tree.ids.reserve(ids.len());
         tree.points.reserve(ids.len() * dim);
         dense_groups_into(groups, &mut tree.groups);
         tree.weights.extend_from_slice(weights);
-        tree.wraps.clear();
         if wraps.contains(&true) {
             tree.wraps.extend_from_slice(wraps);
             tree.periods
@@ -875,6 +852,35 @@ impl KdTree {
             tree.build_lanes(dim);
         }
         tree
+    }
+
+    /// Empties every array (keeping its room) and zeroes the numbers.
+    fn clear(&mut self) {
+        let Self {
+            ids,
+            stretch,
+            groups,
+            points,
+            nodes,
+            weights,
+            wraps,
+            periods,
+            boxes,
+            lanes,
+            lane_periods,
+            reach,
+            diagonal2,
+        } = self;
+        ids.clear();
+        groups.clear();
+        nodes.clear();
+        wraps.clear();
+        lanes.clear();
+        lane_periods.clear();
+        for v in [points, weights, periods, boxes] {
+            v.clear();
+        }
+        (*stretch, *reach, *diagonal2) = (0.0, 0.0, 0.0);
     }
 
     /// Fills `lanes`, `lane_periods`, `reach` and `diagonal2` (leaves `lanes` empty when the
