@@ -1,11 +1,10 @@
-//! Hot loops do not allocate: a counting global allocator (this test binary only) counts the
+//! Hot loops do not allocate: a counting global allocator (`support/counting.rs`, this test
+//! binary only) counts the
 //! heap allocations each thread makes, and the loops a planner runs millions of times (a
 //! state check, an edge check, a nearest-neighbour query, sampling a trajectory) must make
 //! none once their scratch space is warm. A whole plan may allocate only as its trees and
 //! roadmaps grow: amortised, a few allocations per hundred iterations.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
@@ -20,51 +19,10 @@ use hearth_planning::{BiRrt, Budget, Goal, LazyPrm, PlanError, PlanRequest, Plan
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
 
-/// The system allocator, counting each thread's allocations and reallocations.
-struct Counting;
+#[path = "support/counting.rs"]
+mod counting;
 
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn count() {
-    // `try_with`: a thread's last deallocations can run after its counter is gone.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-// SAFETY: every call is passed on to `System` unchanged; counting touches only a
-// thread-local `Cell` with a constant initialiser, which never allocates.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract is `System::alloc`'s.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: as above.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: as above.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: as above.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// The allocations this thread makes while running `f`, and `f`'s result.
-fn allocations<T>(f: impl FnOnce() -> T) -> (u64, T) {
-    let before = ALLOCATIONS.with(Cell::get);
-    let out = f();
-    (ALLOCATIONS.with(Cell::get) - before, out)
-}
+use counting::allocations;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)

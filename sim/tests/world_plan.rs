@@ -1,6 +1,8 @@
 //! Planning against the live world: a BiRRT plan for the Fetch arm over a table with objects,
 //! checked through `World::obstacles_view`, smoothed and executed by the joint controllers,
 //! reaches its goal without touching anything; so does one made by `MotionPlanner` in one call.
+//! Checks through the view allocate nothing (the planning crate's counting allocator is this
+//! binary's).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -12,13 +14,16 @@ use hearth_sim::kinematics::{
 use hearth_sim::planning::goal::PoseGoal;
 use hearth_sim::planning::pipeline::{FETCH_WEIGHT_SCHEDULE, MotionPlanner, MotionSettings};
 use hearth_sim::planning::shortcut::{ShortcutSettings, Smoothing, smooth};
-use hearth_sim::planning::space::JointSpace;
+use hearth_sim::planning::space::{JointSpace, Space};
 use hearth_sim::planning::trajectory::{Limits, Trajectory};
 use hearth_sim::planning::{BiRrt, Budget, MotionValidator, PlanRequest, Planner, RobotValidity, StateValidator};
 use hearth_sim::scene::{SceneFile, SceneObject};
 use hearth_sim::world::{LoadedScene, ModelHandle, SpawnOptions, World, WorldConfig};
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
+
+#[path = "../../planning/tests/support/counting.rs"]
+mod counting;
 
 /// Clearance the planner keeps from obstacles, metres.
 const MARGIN: f32 = 0.005;
@@ -341,4 +346,42 @@ fn motion_planner_in_the_live_world_executes_without_contact() {
     let tip = world.link_pose(robot, "gripper_link").unwrap().translation.vector;
     let off = (tip - target_world.coords).norm();
     assert!(off < 0.05, "the gripper is {off:.3} m from its target");
+}
+
+/// State and edge checks of the arm through the live world's view allocate nothing once warm:
+/// the first pass fills the self-collision certificates its checks land in (a one-off per
+/// cell), and the counted second pass goes over the same states and edges.
+#[test]
+fn checks_through_the_live_view_do_not_allocate() {
+    let (world, robot, _, _) = table_scene();
+    let (chain, _, mut v, _) = arm_validity(&world, robot);
+    let space = JointSpace::from_chain(&chain).unwrap();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+    let qs: Vec<Vec<f64>> = (0..1_500)
+        .map(|_| {
+            let mut q = vec![0.0; space.dim()];
+            space.sample(&mut rng, &mut q);
+            q
+        })
+        .collect();
+    let mut motions = MotionValidator::new(space, 1.0 / 32.0);
+    let mut pass = |v: &mut RobotValidity| {
+        let valid = qs.iter().filter(|q| v.is_valid(q)).count();
+        let free = qs.windows(2).filter(|p| motions.check_motion(v, &p[0], &p[1])).count();
+        (valid, free)
+    };
+    let warm = pass(&mut v);
+    let (n, (valid, free)) = counting::allocations(|| pass(&mut v));
+    assert_eq!((valid, free), warm, "the same answers in both passes");
+    assert!(
+        valid > 0 && valid < qs.len(),
+        "the states mix free and colliding ({valid})"
+    );
+    assert!(free > 0, "some random edges are free");
+    assert_eq!(
+        n,
+        0,
+        "{} state and edge checks through the view allocated {n} times",
+        2 * qs.len()
+    );
 }
