@@ -365,23 +365,5 @@ fn checks_through_the_live_view_do_not_allocate() {
         })
         .collect();
     let mut motions = MotionValidator::new(space, 1.0 / 32.0);
-    let mut pass = |v: &mut RobotValidity| {
-        let valid = qs.iter().filter(|q| v.is_valid(q)).count();
-        let free = qs.windows(2).filter(|p| motions.check_motion(v, &p[0], &p[1])).count();
-        (valid, free)
-    };
-    let warm = pass(&mut v);
-    let (n, (valid, free)) = counting::allocations(|| pass(&mut v));
-    assert_eq!((valid, free), warm, "the same answers in both passes");
-    assert!(
-        valid > 0 && valid < qs.len(),
-        "the states mix free and colliding ({valid})"
-    );
-    assert!(free > 0, "some random edges are free");
-    assert_eq!(
-        n,
-        0,
-        "{} state and edge checks through the view allocated {n} times",
-        2 * qs.len()
-    );
+    counting::assert_checks_do_not_allocate("the Fetch's arm over the table", &mut v, &mut motions, &qs);
 }

@@ -7,6 +7,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+use hearth_planning::motion::MotionValidator;
+use hearth_planning::space::Space;
+use hearth_planning::validity::{RobotValidity, StateValidator};
+
 /// The system allocator, counting each thread's allocations and reallocations.
 struct Counting;
 
@@ -51,4 +55,39 @@ pub fn allocations<T>(f: impl FnOnce() -> T) -> (u64, T) {
     let before = ALLOCATIONS.with(Cell::get);
     let out = f();
     (ALLOCATIONS.with(Cell::get) - before, out)
+}
+
+/// Checks `states` and the edges between consecutive ones twice, and asserts that the second
+/// pass answered as the first and allocated nothing. The first pass fills what a check fills
+/// once: the cells of the self-collision certificate tables its checks land in. The states
+/// must mix free and colliding ones, and some edges must be free. `label` names the case.
+pub fn assert_checks_do_not_allocate<S: Space>(
+    label: &str,
+    validity: &mut RobotValidity,
+    motions: &mut MotionValidator<S>,
+    states: &[Vec<f64>],
+) {
+    let mut pass = || {
+        let valid = states.iter().filter(|q| validity.is_valid(q)).count();
+        let free = states
+            .windows(2)
+            .filter(|p| motions.check_motion(validity, &p[0], &p[1]))
+            .count();
+        (valid, free)
+    };
+    let warm = pass();
+    let (n, (valid, free)) = allocations(&mut pass);
+    assert_eq!((valid, free), warm, "{label}: the same answers in both passes");
+    assert!(
+        valid > 0 && valid < states.len(),
+        "{label}: the states mix free and colliding ({valid} of {} free)",
+        states.len()
+    );
+    assert!(free > 0, "{label}: some edges are free");
+    assert_eq!(
+        n,
+        0,
+        "{label}: {} state and edge checks allocated {n} times",
+        2 * states.len()
+    );
 }
