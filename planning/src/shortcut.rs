@@ -186,16 +186,15 @@ impl Clock {
     }
 }
 
-/// Cumulative lengths of a path's states.
-fn cumulative<S: Space>(space: &S, states: &[Vec<f64>]) -> Vec<f64> {
-    let mut acc = Vec::with_capacity(states.len());
+/// Cumulative lengths of a path's states, written into `acc`.
+fn cumulative_into<S: Space>(space: &S, states: &[Vec<f64>], acc: &mut Vec<f64>) {
+    acc.clear();
     let mut total = 0.0;
     acc.push(0.0);
     for w in states.windows(2) {
         total += space.distance(&w[0], &w[1]);
         acc.push(total);
     }
-    acc
 }
 
 /// The point at arc length `u` along a path, written into `q`; returns the index of its edge.
@@ -255,7 +254,8 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let mut stats = ShortcutStats::default();
     let space = motion.space().clone();
     // Arc lengths change only when a shortcut is accepted.
-    let mut acc = cumulative(&space, &states);
+    let mut acc = Vec::with_capacity(states.len());
+    cumulative_into(&space, &states, &mut acc);
     // The shortcut's ends, kept between attempts: an attempt that fails allocates nothing.
     let (mut a, mut b) = (vec![0.0; space.dim()], vec![0.0; space.dim()]);
     for _ in 0..settings.attempts {
@@ -303,17 +303,13 @@ pub fn random<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         {
             continue;
         }
-        let mut next = Vec::with_capacity(states.len());
-        next.extend_from_slice(&states[..=i]);
-        if space.distance(&a, &states[i]) > 0.0 {
-            next.push(a.clone());
-        }
-        if space.distance(&b, &states[j + 1]) > 0.0 {
-            next.push(b.clone());
-        }
-        next.extend_from_slice(&states[j + 1..]);
-        states = next;
-        acc = cumulative(&space, &states);
+        // The states between the ends give way to the ends (those not already states), in
+        // place: only the new ends are allocated.
+        let keep_a = space.distance(&a, &states[i]) > 0.0;
+        let keep_b = space.distance(&b, &states[j + 1]) > 0.0;
+        let ends = [keep_a.then(|| a.clone()), keep_b.then(|| b.clone())];
+        states.splice(i + 1..=j, ends.into_iter().flatten());
+        cumulative_into(&space, &states, &mut acc);
         stats.accepted += 1;
     }
     stats.time = clock.start.elapsed();
