@@ -38,7 +38,7 @@ use crate::error::PlanError;
 use crate::motion::{MotionValidator, checked_resolution};
 use crate::planner::{Budget, Goal, Path, PlanRequest, Planner};
 use crate::space::{Space, steer};
-use crate::trajectory::{Limits, Ramps, Trajectory, TrajectoryError};
+use crate::trajectory::{Limits, Ramps, Trajectory, TrajectoryError, usable_resolution};
 use crate::validity::StateValidator;
 
 /// Parabolic shortcut attempts between fine checks.
@@ -373,7 +373,7 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     let space = motion.space().clone();
     let coarse = motion.resolution();
     // (A resolution the space cannot use proves no ramp valid.)
-    let coarse_usable = Trajectory::usable_resolution(&space, coarse);
+    let coarse_usable = usable_resolution(&space, coarse).is_ok();
     let mut stats = ShortcutStats::default();
     let (mut q1, mut v1, mut q2, mut v2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut flat = Vec::new();

@@ -65,7 +65,7 @@ pub(crate) fn between(
     limits: &Limits,
     sync: Sync,
 ) -> Result<Generated, TrajectoryError> {
-    let mut ramps = Ramps::new(limits, sync);
+    let mut ramps = RampGenerator::new(limits, sync);
     let mut out = Generated::new(Some(limits.dim()));
     ramps.between(q0, v0, q1, v1, &mut out)?;
     Ok(out)
@@ -73,13 +73,13 @@ pub(crate) fn between(
 
 /// Time-optimal state-to-state motions within fixed limits, one after another, in the same
 /// generator and input: after the first, computing one allocates nothing (as Ruckig is used
-/// in a control loop). The shortcutter's ramps.
-pub(crate) struct Ramps {
+/// in a control loop). The generator of the shortcutter's ramps (`trajectory::Ramps`).
+pub(crate) struct RampGenerator {
     otg: Ruckig<0, ThrowErrorHandler>,
     input: InputParameter<0>,
 }
 
-impl Ramps {
+impl RampGenerator {
     /// A generator of motions within `limits` (and their position bounds), synchronised by
     /// `sync`.
     pub(crate) fn new(limits: &Limits, sync: Sync) -> Self {

@@ -637,12 +637,6 @@ impl Trajectory {
         Ok(Self::from_pieces(n, vec![Piece::Generated(Box::new(g))]))
     }
 
-    /// Checks `resolution` as [`Trajectory::check`] does, for a caller that checks many
-    /// motions at it ([`Ramps::is_valid`]).
-    pub(crate) fn usable_resolution<S: Space>(space: &S, resolution: f64) -> bool {
-        usable_resolution(space, resolution).is_ok()
-    }
-
     /// Replaces `[t1, t2]` by `other` (one span), which must join the states at both times.
     pub(crate) fn splice_trajectory(&mut self, t1: f64, t2: f64, other: Trajectory) {
         if let Some(span) = other.spans.into_iter().next() {
@@ -999,7 +993,7 @@ const SPACING_AIM: f64 = 0.96;
 /// [`TrajectoryError::BadResolution`] unless `resolution` is positive and finite, and
 /// [`TrajectoryError::ResolutionTooFine`] when it is finer than `space` allows: the check
 /// every sampling of a whole trajectory makes before it samples.
-fn usable_resolution<S: Space>(space: &S, resolution: f64) -> Result<(), TrajectoryError> {
+pub(crate) fn usable_resolution<S: Space>(space: &S, resolution: f64) -> Result<(), TrajectoryError> {
     positive(resolution).ok_or(TrajectoryError::BadResolution { value: resolution })?;
     let finest = finest_resolution(space);
     if resolution < finest {
@@ -1078,7 +1072,7 @@ fn discretise_timed<S: Space>(
 /// the same generator and output: computing and checking a ramp allocates nothing; only one
 /// that is taken ([`Ramps::take`]) becomes a trajectory of its own.
 pub(crate) struct Ramps {
-    generator: generator::Ramps,
+    generator: generator::RampGenerator,
     ramp: Generated,
     dim: usize,
 }
@@ -1088,7 +1082,7 @@ impl Ramps {
     /// [`Limits::without_jerk`] for parabolic ramps).
     pub(crate) fn new(limits: &Limits) -> Self {
         Self {
-            generator: generator::Ramps::new(limits, Sync::Time),
+            generator: generator::RampGenerator::new(limits, Sync::Time),
             ramp: Generated::new(Some(limits.dim())),
             dim: limits.dim(),
         }
@@ -1108,7 +1102,7 @@ impl Ramps {
 
     /// Whether every state along the last computed ramp, at most `resolution` apart, is valid
     /// (as [`Trajectory::check`] of the ramp as a trajectory would find); `resolution` must be usable
-    /// ([`Trajectory::usable_resolution`]); `flat` is scratch space.
+    /// ([`usable_resolution`]); `flat` is scratch space.
     pub(crate) fn is_valid<S: Space, V: StateValidator + ?Sized>(
         &self,
         space: &S,
