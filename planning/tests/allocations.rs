@@ -276,10 +276,7 @@ fn robot_plans_allocate_little() {
 }
 
 /// Smoothing allocates for the shortcuts it accepts (the path or trajectory they change), not
-/// for the attempts it rejects. (One exception, outside this test: a ramp that Ruckig refuses,
-/// such as one overshooting position bounds, costs the error message `rsruckig` writes before
-/// it reports the refusal. In the planning benchmark that is rare: allocation is under 2 % of
-/// its profile.)
+/// for the attempts it rejects.
 #[test]
 fn shortcut_attempts_that_fail_do_not_allocate() {
     use hearth_planning::shortcut::{self, ShortcutSettings};
@@ -331,4 +328,68 @@ fn shortcut_attempts_that_fail_do_not_allocate() {
             n1.saturating_sub(n0)
         );
     }
+}
+
+/// Ramps that the generator refuses cost no allocation either: the shortcutter tests their
+/// target states before it asks (`rsruckig` writes the text of every refusal). Here the
+/// motion runs to the bound `x ≤ 1` and back, braking at the very acceleration the
+/// shortcutter may use: a ramp ending on the way up, where a stop at that acceleration
+/// overruns the bound by a rounding error, is refused (as the benchmark's motions near joint
+/// limits are).
+#[test]
+fn refused_ramps_do_not_allocate() {
+    use hearth_planning::shortcut::{self, ShortcutSettings};
+    use rand::RngExt;
+    struct Free;
+    impl StateValidator for Free {
+        fn is_valid(&mut self, _: &[f64]) -> bool {
+            true
+        }
+        fn checks(&self) -> u64 {
+            0
+        }
+    }
+    let space = JointSpace::new(&[0.0, 0.0], &[1.0, 1.0], &[false, false]).unwrap();
+    let path = hearth_planning::Path {
+        states: vec![vec![0.0, 0.0], vec![1.0, 0.2], vec![0.0, 0.4], vec![1.0, 0.6]],
+    };
+    let limits = Limits::new(vec![1.0; 2], vec![0.5; 2], vec![f64::INFINITY; 2])
+        .unwrap()
+        .with_position_bounds(vec![0.0; 2], vec![1.0; 2])
+        .unwrap();
+    let start = Trajectory::rest_to_rest(&space, &path, &limits).unwrap();
+    // Some ramps between two random times of the motion are refused (36 of 200 with this seed).
+    let mut rng = Pcg64Mcg::seed_from_u64(2);
+    let (mut q1, mut v1, mut q2, mut v2) = ([0.0; 2], [0.0; 2], [0.0; 2], [0.0; 2]);
+    let refused = (0..200)
+        .filter(|_| {
+            let (a, b) = (rng.random::<f64>(), rng.random::<f64>());
+            start.sample(a.min(b) * start.duration(), &mut q1, Some(&mut v1));
+            start.sample(a.max(b) * start.duration(), &mut q2, Some(&mut v2));
+            Trajectory::ramp(&q1, &v1, &q2, &v2, &limits).is_err()
+        })
+        .count();
+    assert!(refused >= 20, "{refused} of 200 ramps refused");
+    let run = |attempts: usize| {
+        let settings = ShortcutSettings {
+            attempts,
+            ..Default::default()
+        };
+        let mut motion = MotionValidator::new(space.clone(), 0.01);
+        let mut t = start.clone();
+        let mut rng = Pcg64Mcg::seed_from_u64(1);
+        let (n, stats) =
+            allocations(|| shortcut::parabolic(&mut motion, &mut Free, &mut t, &limits, &settings, &mut rng));
+        (n, stats.unwrap().accepted)
+    };
+    let ((n0, a0), (n1, a1)) = (run(100), run(2_100));
+    println!(
+        "{refused} of 200 ramps refused; {n0} allocations and {a0} shortcuts in 100 attempts, {n1} and {a1} in 2,100"
+    );
+    assert!(
+        n1 <= n0 + 64 * (a1 - a0),
+        "2,000 more attempts ({} more shortcuts) allocated {} more times",
+        a1 - a0,
+        n1.saturating_sub(n0)
+    );
 }

@@ -104,6 +104,26 @@ impl RampGenerator {
         v1: &[f64],
         out: &mut Generated,
     ) -> Result<(), TrajectoryError> {
+        self.set(q0, v0, q1, v1);
+        calculate(&mut self.otg, &self.input, out)
+    }
+
+    /// As [`RampGenerator::between`], but `false` instead of an error, and without calling the
+    /// generator for a target state it refuses before computing anything
+    /// ([`target_refused`]): the generator formats the text of every refusal, and the
+    /// shortcutter, which tries ramps in a loop, has no use for it.
+    pub(crate) fn try_between(&mut self, q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64], out: &mut Generated) -> bool {
+        self.set(q0, v0, q1, v1);
+        if target_refused(&self.input) {
+            return false;
+        }
+        matches!(
+            self.otg.calculate(&self.input, out),
+            Ok(RuckigResult::Working | RuckigResult::Finished)
+        )
+    }
+
+    fn set(&mut self, q0: &[f64], v0: &[f64], q1: &[f64], v1: &[f64]) {
         let input = &mut self.input;
         for i in 0..q0.len() {
             input.current_position[i] = q0[i];
@@ -113,8 +133,60 @@ impl RampGenerator {
             input.target_velocity[i] = v1[i];
             input.target_acceleration[i] = 0.0;
         }
-        calculate(&mut self.otg, input, out)
     }
+}
+
+/// Whether the generator's validation refuses `input`'s target state, for an input whose limits
+/// are valid (as [`Limits`] makes them), without minimum velocities or accelerations, in
+/// position control, with every state finite and the target at rest in acceleration: the
+/// target velocity beyond its limit, or, with position bounds, the target position beyond them
+/// or a stop from the target state (at full deceleration, jerk-limited when the jerk is finite)
+/// that would overrun them. The same tests, in the same arithmetic, as `rsruckig`'s
+/// `InputParameter::validate` makes of the target state; the generator checks no other
+/// state before it computes (`calculate` leaves the current state unchecked).
+pub(crate) fn target_refused(input: &InputParameter<0>) -> bool {
+    use rsruckig::brake::{stop_distance_second_order, stop_distance_third_order};
+    for dof in 0..input.degrees_of_freedom {
+        let (v_max, a_max, j_max) = (
+            input.max_velocity[dof],
+            input.max_acceleration[dof],
+            input.max_jerk[dof],
+        );
+        let (pf, vf, af) = (
+            input.target_position[dof],
+            input.target_velocity[dof],
+            input.target_acceleration[dof],
+        );
+        if vf > v_max || vf < -v_max {
+            return true;
+        }
+        if input.max_position.is_none() && input.min_position.is_none() {
+            continue;
+        }
+        let max_pos = input.max_position.as_ref().map_or(f64::INFINITY, |p| p[dof]);
+        let min_pos = input.min_position.as_ref().map_or(f64::NEG_INFINITY, |p| p[dof]);
+        if pf > max_pos || pf < min_pos {
+            return true;
+        }
+        let a_min = -a_max;
+        let (up, down) = if j_max > 0.0 && j_max.is_finite() {
+            (
+                stop_distance_third_order(vf, af, a_min, j_max),
+                stop_distance_third_order(-vf, -af, a_max, j_max),
+            )
+        } else if a_max.is_finite() || a_min.is_finite() {
+            (
+                stop_distance_second_order(vf, a_min),
+                stop_distance_second_order(-vf, a_max),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        if up > max_pos - pf || down > pf - min_pos {
+            return true;
+        }
+    }
+    false
 }
 
 /// Runs the generator, its errors as [`TrajectoryError::Generator`].
@@ -212,5 +284,51 @@ mod tests {
         );
         assert_eq!(without_input_dump("a, b, input: \n x"), "a, b");
         assert_eq!(without_input_dump("no dump"), "no dump");
+    }
+
+    /// Three coordinates, the first two bounded to [-1, 1] and [0, 2], the third unbounded.
+    fn bounded(jerk: f64) -> RampGenerator {
+        let limits = Limits::new(vec![1.0, 2.0, 0.5], vec![2.0, 4.0, 1.0], vec![jerk; 3])
+            .unwrap()
+            .with_position_bounds(vec![-1.0, 0.0, f64::NEG_INFINITY], vec![1.0, 2.0, f64::INFINITY])
+            .unwrap();
+        RampGenerator::new(&limits, Sync::Time)
+    }
+
+    /// The shortcutter's pre-test refuses what the generator's own validation refuses, no
+    /// more and no less, with and without a jerk limit: a stop from 1 rad/s at 2 rad/s² takes
+    /// 0.25 rad, so 0.8 rad moving up in [-1, 1] overruns the bound and 0.7 does not.
+    #[test]
+    fn target_refused_marks_what_the_generator_refuses() {
+        let mut ramps = bounded(f64::INFINITY);
+        let mut out = Generated::new(Some(3));
+        let rest = [0.0; 3];
+        assert!(ramps.try_between(&rest, &rest, &[0.7, 1.0, 0.0], &[1.0, 0.0, 0.0], &mut out));
+        assert!(!ramps.try_between(&rest, &rest, &[0.8, 1.0, 0.0], &[1.0, 0.0, 0.0], &mut out));
+        assert!(!ramps.try_between(&rest, &rest, &[0.0, 1.0, 0.0], &[0.0, 0.0, -0.5000001], &mut out));
+        assert!(!ramps.try_between(&rest, &rest, &[0.0, 2.1, 0.0], &rest, &mut out));
+        assert!(
+            ramps
+                .between(&rest, &rest, &[0.8, 1.0, 0.0], &[1.0, 0.0, 0.0], &mut out)
+                .is_err()
+        );
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(3000))]
+
+        /// Targets near the bounds and the velocity limits: [`target_refused`] is exactly the
+        /// generator's validation of the target state.
+        #[test]
+        fn target_refused_is_the_generators_validation(
+            p in proptest::collection::vec(-1.2f64..2.2, 3),
+            v in proptest::collection::vec(-2.1f64..2.1, 3),
+            jerk in proptest::sample::select(vec![f64::INFINITY, 5.0, 50.0]),
+        ) {
+            let mut ramps = bounded(jerk);
+            ramps.set(&[0.0, 1.0, 0.0], &[0.0; 3], &p, &v);
+            let refused = ramps.input.validate::<ThrowErrorHandler>(false, true).is_err();
+            proptest::prop_assert_eq!(target_refused(&ramps.input), refused);
+        }
     }
 }

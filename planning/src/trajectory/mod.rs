@@ -1096,7 +1096,9 @@ impl Ramps {
         if [q0, v0, q1, v1].iter().any(|x| x.iter().any(|c| !c.is_finite())) {
             return None;
         }
-        self.generator.between(q0, v0, q1, v1, &mut self.ramp).ok()?;
+        if !self.generator.try_between(q0, v0, q1, v1, &mut self.ramp) {
+            return None;
+        }
         Some(self.ramp.get_duration())
     }
 
