@@ -144,7 +144,7 @@ impl RampGenerator {
 /// that would overrun them. The same tests, in the same arithmetic, as `rsruckig`'s
 /// `InputParameter::validate` makes of the target state; the generator checks no other
 /// state before it computes (`calculate` leaves the current state unchecked).
-pub(crate) fn target_refused(input: &InputParameter<0>) -> bool {
+fn target_refused(input: &InputParameter<0>) -> bool {
     use rsruckig::brake::{stop_distance_second_order, stop_distance_third_order};
     for dof in 0..input.degrees_of_freedom {
         let (v_max, a_max, j_max) = (
