@@ -86,7 +86,7 @@ pub mod trajectory;
 mod twins;
 pub mod validity;
 
-pub use birrt::{BiRrt, Connect, DynamicDomain};
+pub use birrt::{BiRrt, Connect, DynamicDomain, ShortSteps};
 pub use error::PlanError;
 pub use escape::Escape;
 pub use lazy_prm::{LazyPrm, LazyPrmSettings};

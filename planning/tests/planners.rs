@@ -15,7 +15,7 @@ use hearth_planning::trajectory::Limits;
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, Path, PlanError,
-    PlanRequest, Planner, Race, Rrt, Solution,
+    PlanRequest, Planner, Race, Rrt, ShortSteps, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -321,13 +321,15 @@ fn pocketed_goal_birrt_escape_onward() {
     pocketed_goal_escape("pocket/birrt_onward", Connect::Onward);
 }
 
-/// The goal in [`pocket`] is reached through the hole with the escape, and never without it.
+/// The goal in [`pocket`] is reached through the hole with the escape, and never without it
+/// (with full steps only: [`pocketed_goal_birrt_short_steps`] leaves by shorter ones).
 fn pocketed_goal_escape(label: &str, connect: Connect) {
     let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
     let with = |escape| BiRrt {
         range: Some(0.4),
         escape,
         connect,
+        short_steps: None,
         ..BiRrt::default()
     };
     solve_pocket(label, || with(Some(Escape::default())), &request);
@@ -337,6 +339,76 @@ fn pocketed_goal_escape(label: &str, connect: Connect) {
     match with(None).plan(&mut motion, &mut pocket(), &request, &budget(200_000), &mut rng) {
         Err(PlanError::Timeout { stats }) => assert_eq!(stats.tree_sizes[1], 1, "{stats:?}"),
         other => panic!("{label}: expected a timeout, got {other:?}"),
+    }
+}
+
+/// A wedged tree's shorter steps ([`ShortSteps`]) in [`pocket`]: steps of 0.16 fit along the
+/// corridor, so the goal tree spreads through it, and a near-vertical one from below the hole
+/// sometimes clears it. Over sixteen streams: with the escape as well every plan succeeds in
+/// about two thirds of the iterations the escape alone takes (217,700 against 322,790), and
+/// alone they solve 7 plans where full steps alone solve none.
+#[test]
+fn pocketed_goal_birrt_short_steps() {
+    let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
+    let with = |escape, short_steps| BiRrt {
+        range: Some(0.4),
+        escape,
+        short_steps,
+        ..BiRrt::default()
+    };
+    let run = |escape: Option<Escape>, short_steps: Option<ShortSteps>| {
+        let (mut solved, mut iterations) = (0, 0);
+        for seed in 0..16u64 {
+            let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            match with(escape, short_steps).plan(&mut motion, &mut pocket(), &request, &budget(400_000), &mut rng) {
+                Ok(s) => {
+                    solved += 1;
+                    iterations += s.stats.iterations;
+                }
+                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
+                Err(e) => panic!("pocket: {e}"),
+            }
+        }
+        (solved, iterations)
+    };
+    let (e, s) = (Some(Escape::default()), Some(ShortSteps::default()));
+    let (both, escape, short, neither) = (run(e, s), run(e, None), run(None, s), run(None, None));
+    println!(
+        "pocket (solved, iterations): both {both:?}, escape {escape:?}, short steps {short:?}, neither {neither:?}"
+    );
+    assert_eq!((both.0, escape.0, neither.0), (16, 16, 0));
+    assert!(
+        4 * both.1 < 3 * escape.1,
+        "with short steps {both:?}, without {escape:?}"
+    );
+    assert!(short.0 >= 4, "short steps alone: {short:?}");
+    // Bad settings are refused before planning.
+    for bad in [
+        ShortSteps {
+            scale: 0.0,
+            ..ShortSteps::default()
+        },
+        ShortSteps {
+            scale: 1.5,
+            ..ShortSteps::default()
+        },
+        ShortSteps {
+            scale: f64::NAN,
+            ..ShortSteps::default()
+        },
+        ShortSteps {
+            per: 0,
+            ..ShortSteps::default()
+        },
+    ] {
+        let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
+        let mut rng = Pcg64Mcg::seed_from_u64(0);
+        let got = with(None, Some(bad)).plan(&mut motion, &mut pocket(), &request, &budget(10), &mut rng);
+        assert!(
+            matches!(&got, Err(PlanError::BadInput(m)) if m.contains("short steps")),
+            "{bad:?}: {got:?}"
+        );
     }
 }
 

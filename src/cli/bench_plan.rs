@@ -18,7 +18,7 @@ use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::{Limits, Trajectory};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
-    PlanRequest, Race, RobotValidity, Rrt, StateValidator,
+    PlanRequest, Race, RobotValidity, Rrt, ShortSteps, StateValidator,
 };
 use hearth_sim::randomize::mix;
 use hearth_skills::arm::WAYPOINT_SPACING;
@@ -177,6 +177,12 @@ pub struct BenchPlanArgs {
     /// planned the Panda's open ones faster. See `docs/planning-log.md`.
     #[arg(long, value_enum)]
     connect: Option<ConnectArg>,
+    /// BiRRT only: the step of a wedged tree (one that has grown by fewer than one state per
+    /// 500 attempts after 100), as a fraction of the step (`ShortSteps::scale`), in (0, 1];
+    /// 1 keeps every step full. When absent: 0.4, the planner's default. See
+    /// `docs/planning-log.md`.
+    #[arg(long, value_name = "FRACTION")]
+    short_steps: Option<f64>,
     /// LazyPRM only: whether a wedged start or goal grows greedily, each free growth step going
     /// on towards its sample until blocked (`LazyPrmSettings::tree_connect`): `true` or
     /// `false`. When absent: on for the Fetch, where it solved more of the bookshelf and cage
@@ -269,6 +275,14 @@ fn birrt_for(robot: &str, dof: usize, a: &BenchPlanArgs) -> BiRrt {
             ..DynamicDomain::default()
         }),
         escape: escape_for(a),
+        short_steps: match a.short_steps {
+            Some(scale) if scale >= 1.0 => None,
+            Some(scale) => Some(ShortSteps {
+                scale,
+                ..ShortSteps::default()
+            }),
+            None => Some(ShortSteps::default()),
+        },
         ..BiRrt::default()
     }
 }
@@ -549,6 +563,12 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     }
     if a.connect.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--connect applies to --planner birrt only");
+    }
+    if a.short_steps.is_some() && a.planner != PlannerKind::Birrt {
+        bail!("--short-steps applies to --planner birrt only");
+    }
+    if a.short_steps.is_some_and(|s| !(s > 0.0 && s <= 1.0)) {
+        bail!("--short-steps must be in (0, 1]");
     }
     if a.tree_connect.is_some() && a.planner != PlannerKind::Lazyprm {
         bail!("--tree-connect applies to --planner lazyprm only");
