@@ -106,7 +106,8 @@ pub struct ShortSteps {
     /// A tree is wedged while it has grown by fewer than one state per this many attempts
     /// (at least 1).
     pub per: u64,
-    /// A wedged tree's step, as a fraction of the planner's step, in (0, 1].
+    /// A wedged tree's step, as a fraction of the planner's step, in (0, 1]; 1 keeps every
+    /// step full, as `None` does (a settings file can write it, having no `None`).
     pub scale: f64,
 }
 
