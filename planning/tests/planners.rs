@@ -342,6 +342,29 @@ fn pocketed_goal_escape(label: &str, connect: Connect) {
     }
 }
 
+/// (plans solved, iterations in all) of `birrt` in [`pocket`] from (20, 20) over sixteen
+/// streams, each within 400,000 iterations.
+fn pocket_runs(birrt: &BiRrt) -> (usize, u64) {
+    let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
+    let (mut solved, mut iterations) = (0, 0);
+    for seed in 0..16u64 {
+        let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        match birrt
+            .clone()
+            .plan(&mut motion, &mut pocket(), &request, &budget(400_000), &mut rng)
+        {
+            Ok(s) => {
+                solved += 1;
+                iterations += s.stats.iterations;
+            }
+            Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
+            Err(e) => panic!("pocket, {birrt:?}: {e}"),
+        }
+    }
+    (solved, iterations)
+}
+
 /// A wedged tree's shorter steps ([`ShortSteps`]) in [`pocket`]: steps of 0.16 fit along the
 /// corridor, so the goal tree spreads through it, and a near-vertical one from below the hole
 /// sometimes clears it. Over sixteen streams: with the escape as well every plan succeeds in
@@ -356,22 +379,7 @@ fn pocketed_goal_birrt_short_steps() {
         short_steps,
         ..BiRrt::default()
     };
-    let run = |escape: Option<Escape>, short_steps: Option<ShortSteps>| {
-        let (mut solved, mut iterations) = (0, 0);
-        for seed in 0..16u64 {
-            let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
-            let mut rng = Pcg64Mcg::seed_from_u64(seed);
-            match with(escape, short_steps).plan(&mut motion, &mut pocket(), &request, &budget(400_000), &mut rng) {
-                Ok(s) => {
-                    solved += 1;
-                    iterations += s.stats.iterations;
-                }
-                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
-                Err(e) => panic!("pocket: {e}"),
-            }
-        }
-        (solved, iterations)
-    };
+    let run = |escape, short_steps| pocket_runs(&with(escape, short_steps));
     let (e, s) = (Some(Escape::default()), Some(ShortSteps::default()));
     let (both, escape, short, neither) = (run(e, s), run(e, None), run(None, s), run(None, None));
     println!(
@@ -420,30 +428,15 @@ fn pocketed_goal_birrt_short_steps() {
 /// the whole plan (one of which does not succeed within the budget).
 #[test]
 fn pocketed_goal_birrt_escape_reset() {
-    let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
     let run = |reset: u64| {
-        let (mut solved, mut iterations) = (0, 0);
-        for seed in 0..16u64 {
-            let mut birrt = BiRrt {
-                range: Some(0.4),
-                escape: Some(Escape {
-                    reset,
-                    ..Escape::default()
-                }),
-                ..BiRrt::default()
-            };
-            let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
-            let mut rng = Pcg64Mcg::seed_from_u64(seed);
-            match birrt.plan(&mut motion, &mut pocket(), &request, &budget(400_000), &mut rng) {
-                Ok(s) => {
-                    solved += 1;
-                    iterations += s.stats.iterations;
-                }
-                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
-                Err(e) => panic!("pocket, reset {reset}: {e}"),
-            }
-        }
-        (solved, iterations)
+        pocket_runs(&BiRrt {
+            range: Some(0.4),
+            escape: Some(Escape {
+                reset,
+                ..Escape::default()
+            }),
+            ..BiRrt::default()
+        })
     };
     let (reset, kept) = (run(Escape::default().reset), run(u64::MAX));
     println!("pocket: {reset:?} (solved, iterations) with resets, {kept:?} without");
