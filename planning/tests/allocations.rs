@@ -6,9 +6,9 @@
 //! roadmaps grow: amortised, a few allocations per hundred iterations.
 
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
-use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_kinematics::{Chain, RobotModel};
 use hearth_planning::motion::MotionValidator;
 use hearth_planning::nn::NearestNeighbors;
 use hearth_planning::problem::ProblemSet;
@@ -21,28 +21,14 @@ use rand_pcg::Pcg64Mcg;
 
 #[path = "support/counting.rs"]
 mod counting;
+#[path = "support/matrix.rs"]
+mod matrix;
 
 use counting::allocations;
+use matrix::matrix;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
-}
-
-fn matrix(robot: &str) -> SelfCollisionMatrix {
-    static PANDA: OnceLock<SelfCollisionMatrix> = OnceLock::new();
-    static FETCH: OnceLock<SelfCollisionMatrix> = OnceLock::new();
-    let cell = if robot == "panda" { &PANDA } else { &FETCH };
-    cell.get_or_init(|| {
-        let m = RobotModel::builtin(robot).unwrap();
-        SelfCollisionMatrix::compute(
-            &m,
-            &SelfCollisionSettings {
-                samples: 300,
-                ..Default::default()
-            },
-        )
-    })
-    .clone()
 }
 
 /// A robot's planning chain among the obstacles of the first problem of its

@@ -2,10 +2,10 @@
 //! post on it, and a MotionBenchMaker problem; plus bad input for every [`PlanError`] case.
 
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::Instant;
 
-use hearth_kinematics::{Chain, RobotModel, SelfCollisionMatrix, SelfCollisionSettings};
+use hearth_kinematics::{Chain, RobotModel};
 use hearth_planning::motion::{MAX_SEGMENTS, finest_resolution};
 use hearth_planning::obstacles::{Obstacle, ParryScene};
 use hearth_planning::problem::ProblemSet;
@@ -20,6 +20,10 @@ use hearth_planning::{
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
 use rand_pcg::Pcg64Mcg;
+
+#[path = "support/matrix.rs"]
+mod matrix;
+use matrix::matrix;
 
 /// A 2-D world given by which states are free; it counts its checks.
 struct Region {
@@ -58,27 +62,12 @@ fn passage_request() -> PlanRequest {
     PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.9, 0.1]))
 }
 
-fn panda_matrix() -> SelfCollisionMatrix {
-    static ACM: OnceLock<SelfCollisionMatrix> = OnceLock::new();
-    ACM.get_or_init(|| {
-        let m = RobotModel::builtin("panda").unwrap();
-        SelfCollisionMatrix::compute(
-            &m,
-            &SelfCollisionSettings {
-                samples: 300,
-                ..Default::default()
-            },
-        )
-    })
-    .clone()
-}
-
 /// The Panda arm, fingers open at 0.04, among `obstacles`.
 fn panda(obstacles: ParryScene) -> (JointSpace, RobotValidity) {
     let m = RobotModel::builtin("panda").unwrap();
     let arm = Chain::named(&m, "arm").unwrap();
     let space = JointSpace::from_chain(&arm).unwrap();
-    let mut v = RobotValidity::new(arm, panda_matrix(), Arc::new(obstacles));
+    let mut v = RobotValidity::new(arm, matrix("panda"), Arc::new(obstacles));
     let mut q_full = m.neutral_configuration();
     Chain::new(&m, &["panda_finger_joint1"])
         .unwrap()
