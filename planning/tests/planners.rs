@@ -380,25 +380,13 @@ fn pocketed_goal_birrt_short_steps() {
         "with short steps {both:?}, without {escape:?}"
     );
     assert!(short.0 >= 4, "short steps alone: {short:?}");
-    // Bad settings are refused before planning.
-    for bad in [
-        ShortSteps {
-            scale: 0.0,
+    // Bad settings (scale, per) are refused before planning.
+    for (scale, per) in [(0.0, 500), (1.5, 500), (f64::NAN, 500), (0.4, 0)] {
+        let bad = ShortSteps {
+            scale,
+            per,
             ..ShortSteps::default()
-        },
-        ShortSteps {
-            scale: 1.5,
-            ..ShortSteps::default()
-        },
-        ShortSteps {
-            scale: f64::NAN,
-            ..ShortSteps::default()
-        },
-        ShortSteps {
-            per: 0,
-            ..ShortSteps::default()
-        },
-    ] {
+        };
         let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
         let mut rng = Pcg64Mcg::seed_from_u64(0);
         let got = with(None, Some(bad)).plan(&mut motion, &mut pocket(), &request, &budget(10), &mut rng);
