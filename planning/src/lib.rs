@@ -86,7 +86,7 @@ pub mod trajectory;
 mod twins;
 pub mod validity;
 
-pub use birrt::{BiRrt, Connect, DynamicDomain, ShortSteps};
+pub use birrt::{BiRrt, Connect, DynamicDomain, Retraction, ShortSteps};
 pub use error::PlanError;
 pub use escape::Escape;
 pub use lazy_prm::{LazyPrm, LazyPrmSettings};

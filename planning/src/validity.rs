@@ -15,6 +15,8 @@ use crate::pair_lanes::PairLanes;
 use crate::reach::{Reach, Row};
 use crate::twins::Twins;
 
+mod retract;
+
 /// Decides whether one configuration is collision-free. Planners only see this trait, so a
 /// vectorised or approximate checker can slot in without touching them.
 ///
@@ -149,6 +151,30 @@ pub trait StateValidator {
     /// ```
     fn tool_step(&mut self, q: &[f64], axis: usize, length: f64, out: &mut [f64]) -> bool {
         let _ = (q, axis, length, out);
+        false
+    }
+    /// Pushes a state whose robot sinks into obstacles out of them, for planners that grow
+    /// along narrow channels ([`BiRrt::retraction`](crate::BiRrt::retraction)): writes into
+    /// `out` the state reached by up to `rounds` joint steps, each moving the contact points
+    /// (one per touching link) out of the obstacles along the contact normals to `clearance`
+    /// metres beyond the surface, to first order, and returns whether `out` is valid (checked
+    /// and counted). A sample that lands in an obstacle next to a channel becomes a state in
+    /// the channel, where random samples seldom fall. The default knows no geometry: it
+    /// returns false and leaves `out` as it was.
+    ///
+    /// ```
+    /// use hearth_planning::validity::StateValidator;
+    /// struct Free;
+    /// impl StateValidator for Free {
+    ///     fn is_valid(&mut self, _: &[f64]) -> bool { true }
+    ///     fn checks(&self) -> u64 { 0 }
+    /// }
+    /// let mut out = [0.0; 2];
+    /// assert!(!Free.retract(&[0.5, 0.5], 0.01, 3, &mut out)); // no robot, no contacts
+    /// assert_eq!(out, [0.0; 2]);
+    /// ```
+    fn retract(&mut self, q: &[f64], clearance: f64, rounds: usize, out: &mut [f64]) -> bool {
+        let _ = (q, clearance, rounds, out);
         false
     }
 }
@@ -423,6 +449,8 @@ pub struct RobotValidity {
     tool_q: Vec<f64>,
     tool_poses: Vec<Isometry3<f64>>,
     tool_jacobian: nalgebra::Matrix6xX<f64>,
+    /// Scratch of [`StateValidator::retract`].
+    retract: retract::RetractScratch,
     /// Links and pairs that duplicate others for the current reference ([`Twins`]): left out
     /// of the per-check tests.
     twins: Twins,
@@ -827,6 +855,7 @@ impl RobotValidity {
             tool_q: model.neutral_configuration(),
             tool_poses: model.pose_buffer(),
             tool_jacobian: nalgebra::Matrix6xX::zeros(chain.dof()),
+            retract: retract::RetractScratch::new(chain.dof()),
             free: std::array::from_fn(|_| Vec::with_capacity(64)),
             next_to: [[0.0; 32]; 4],
             twins,
@@ -2142,6 +2171,10 @@ impl StateValidator for RobotValidity {
         }
         self.chain.clamp(out);
         out != q
+    }
+
+    fn retract(&mut self, q: &[f64], clearance: f64, rounds: usize, out: &mut [f64]) -> bool {
+        self.retract_state(q, clearance, rounds, out)
     }
 
     /// Four states at a time share one four-lane forward kinematics pass (bit for bit the

@@ -18,7 +18,7 @@ use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::{Limits, Trajectory};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, ParryScene,
-    PlanRequest, Race, RobotValidity, Rrt, ShortSteps, StateValidator,
+    PlanRequest, Race, Retraction, RobotValidity, Rrt, ShortSteps, StateValidator,
 };
 use hearth_sim::randomize::mix;
 use hearth_skills::arm::WAYPOINT_SPACING;
@@ -183,6 +183,11 @@ pub struct BenchPlanArgs {
     /// `docs/planning-log.md`.
     #[arg(long, value_name = "FRACTION")]
     short_steps: Option<f64>,
+    /// BiRRT only: share of a wedged tree's blocked steps pushed out of the obstacles along
+    /// the contact normals (`Retraction::share`), in [0, 1]; 0 turns retraction off. When
+    /// absent: 0.01, the planner's default. See `docs/planning-log.md`.
+    #[arg(long, value_name = "SHARE")]
+    retraction: Option<f64>,
     /// LazyPRM only: whether a wedged start or goal grows greedily, each free growth step going
     /// on towards its sample until blocked (`LazyPrmSettings::tree_connect`): `true` or
     /// `false`. When absent: on for the Fetch, where it solved more of the bookshelf and cage
@@ -282,6 +287,14 @@ fn birrt_for(robot: &str, dof: usize, a: &BenchPlanArgs) -> BiRrt {
                 ..ShortSteps::default()
             }),
             None => Some(ShortSteps::default()),
+        },
+        retraction: match a.retraction {
+            Some(share) if share <= 0.0 => None,
+            Some(share) => Some(Retraction {
+                share,
+                ..Retraction::default()
+            }),
+            None => Some(Retraction::default()),
         },
         ..BiRrt::default()
     }
@@ -569,6 +582,12 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     }
     if a.short_steps.is_some_and(|s| !(s > 0.0 && s <= 1.0)) {
         bail!("--short-steps must be in (0, 1]");
+    }
+    if a.retraction.is_some() && a.planner != PlannerKind::Birrt {
+        bail!("--retraction applies to --planner birrt only");
+    }
+    if a.retraction.is_some_and(|s| !(0.0..=1.0).contains(&s)) {
+        bail!("--retraction must be in [0, 1]");
     }
     if a.tree_connect.is_some() && a.planner != PlannerKind::Lazyprm {
         bail!("--tree-connect applies to --planner lazyprm only");

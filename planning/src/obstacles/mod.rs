@@ -352,6 +352,54 @@ pub trait Obstacles: Send + Sync {
     /// assert_eq!(scene.name(ObstacleId(1)), None);
     /// ```
     fn name(&self, id: ObstacleId) -> Option<&str>;
+
+    /// Where `shape` at `pose` touches obstacle `id`: the shape's deepest point, the normal
+    /// towards the obstacle and the signed distance ([`ObstacleContact`]); `None` when they do
+    /// not touch, for an unknown id, or where the implementation cannot tell (the default).
+    /// [`RobotValidity`](crate::validity::RobotValidity) uses it to push a colliding state out
+    /// of the obstacles ([`StateValidator::retract`](crate::validity::StateValidator::retract)).
+    ///
+    /// ```
+    /// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+    /// use parry3d::math::{Pose, Vector};
+    /// use parry3d::shape::Cuboid;
+    ///
+    /// let floor = Obstacle::cuboid("floor", Pose::translation(0.0, 0.0, -0.5), Vector::splat(0.5));
+    /// let scene = ParryScene::new(vec![floor]);
+    /// let block = Cuboid::new(Vector::splat(0.1));
+    /// let c = scene.contact(ObstacleId(0), &block, &Pose::translation(0.0, 0.0, 0.08)).unwrap();
+    /// assert!((c.distance + 0.02).abs() < 1e-6 && (c.normal.z + 1.0).abs() < 1e-6);
+    /// assert_eq!(scene.contact(ObstacleId(0), &block, &Pose::translation(0.0, 0.0, 0.2)), None);
+    /// assert_eq!(scene.contact(ObstacleId(7), &block, &Pose::IDENTITY), None);
+    /// ```
+    fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
+        let _ = (id, shape, pose);
+        None
+    }
+}
+
+/// Where a shape touches one obstacle ([`Obstacles::contact`]), in world coordinates.
+///
+/// ```
+/// use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene};
+/// use parry3d::math::{Pose, Vector};
+/// use parry3d::shape::Ball;
+///
+/// let scene = ParryScene::new(vec![Obstacle::ball("ball", Vector::ZERO, 0.5)]);
+/// let c = scene.contact(ObstacleId(0), &Ball::new(0.1), &Pose::translation(0.55, 0.0, 0.0)).unwrap();
+/// assert!((c.distance + 0.05).abs() < 1e-6); // 5 cm deep
+/// assert!((c.normal - Vector::new(-1.0, 0.0, 0.0)).length() < 1e-6); // towards the obstacle
+/// assert!((c.point.x - 0.45).abs() < 1e-6); // the probe's deepest point
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObstacleContact {
+    /// The shape's point deepest in the obstacle (or nearest it, when apart).
+    pub point: Vector,
+    /// Unit normal at that point, from the shape towards the obstacle: moving the shape along
+    /// `-normal` by `-distance` separates them.
+    pub normal: Vector,
+    /// Signed distance: negative when they overlap (the penetration depth), positive when apart.
+    pub distance: Real,
 }
 
 /// [`Obstacles::balls_touching`] answered through [`Obstacles::ball_hits`], one ball at a time.

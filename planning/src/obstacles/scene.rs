@@ -11,7 +11,9 @@ use std::ops::{Add, Mul, Sub};
 use wide::f32x8;
 
 use super::gjk::{self, Convex};
-use super::{BallBatch, Obstacle, ObstacleError, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf};
+use super::{
+    BallBatch, Obstacle, ObstacleContact, ObstacleError, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf,
+};
 
 /// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
 /// time) instead of descending the BVH.
@@ -1064,6 +1066,16 @@ impl Obstacles for ParryScene {
 
     fn aabb(&self) -> Option<Aabb> {
         self.bounds
+    }
+
+    fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
+        let o = self.obstacles.get(id.index())?;
+        let c = query::contact(pose, shape, &o.pose, &*o.shape, self.margin).ok()??;
+        Some(ObstacleContact {
+            point: c.point1,
+            normal: c.normal1,
+            distance: c.dist - self.margin,
+        })
     }
 
     fn name(&self, id: ObstacleId) -> Option<&str> {

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use hearth_planning::obstacles::{Obstacle, ObstacleId, Obstacles, ParryScene, nearest_leaf};
+use hearth_planning::obstacles::{Obstacle, ObstacleContact, ObstacleId, Obstacles, ParryScene, nearest_leaf};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher, Ray};
@@ -299,6 +299,17 @@ impl Obstacles for WorldObstacles {
             .filter(|(_, co)| self.keeps(co))
             .map(|(_, co)| co.compute_aabb())
             .reduce(|a, b| a.merged(&b))
+    }
+
+    fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
+        let co = self.candidate(id.0)?;
+        let pos12 = pose.inv_mul(co.position());
+        let c = self.dispatcher().contact(&pos12, shape, co.shape(), self.margin).ok()??;
+        Some(ObstacleContact {
+            point: *pose * c.point1,
+            normal: pose.rotation * c.normal1,
+            distance: c.dist - self.margin,
+        })
     }
 
     fn name(&self, id: ObstacleId) -> Option<&str> {
