@@ -100,6 +100,30 @@ fn fetch_checks_do_not_allocate() {
     checks_do_not_allocate("fetch");
 }
 
+/// Retraction ([`StateValidator::retract`]) of random states, most of them in contact, makes
+/// no allocation once the states' certificate cells are warm: its normal equations live in
+/// scratch made with the validator.
+#[test]
+fn retraction_does_not_allocate() {
+    for robot in ["panda", "fetch"] {
+        let (space, mut v, _) = world(robot);
+        let qs = states(&space, 500, 11);
+        let mut out = vec![0.0; space.dim()];
+        let mut pushed = 0;
+        for q in &qs {
+            pushed += usize::from(v.retract(q, 0.01, 3, &mut out));
+        }
+        let (counted, again) = allocations(|| {
+            qs.iter()
+                .map(|q| usize::from(v.retract(q, 0.01, 3, &mut out)))
+                .sum::<usize>()
+        });
+        assert_eq!(counted, 0, "{robot}: retraction allocated");
+        assert_eq!(again, pushed, "{robot}: the same states pushed out");
+        assert!(pushed > 0, "{robot}: no state was retracted");
+    }
+}
+
 #[test]
 fn nearest_neighbour_queries_do_not_allocate() {
     let (space, _, _) = world("panda");

@@ -15,7 +15,7 @@ use hearth_planning::trajectory::Limits;
 use hearth_planning::validity::{RobotValidity, StateValidator};
 use hearth_planning::{
     BiRrt, Budget, Connect, DynamicDomain, Escape, Goal, LazyPrm, LazyPrmSettings, MotionValidator, Path, PlanError,
-    PlanRequest, Planner, Race, Rrt, ShortSteps, Solution,
+    PlanRequest, Planner, Race, Retraction, Rrt, ShortSteps, Solution,
 };
 use parry3d::math::{Pose, Vector};
 use rand::SeedableRng;
@@ -392,6 +392,155 @@ fn pocketed_goal_birrt_short_steps() {
         let got = with(None, Some(bad)).plan(&mut motion, &mut pocket(), &request, &budget(10), &mut rng);
         assert!(
             matches!(&got, Err(PlanError::BadInput(m)) if m.contains("short steps")),
+            "{bad:?}: {got:?}"
+        );
+    }
+}
+
+/// Half the width of [`channel_free`]'s channel.
+const CHANNEL_HALF_WIDTH: f64 = 0.0002;
+
+/// A block x ∈ [0.3, 0.9], y ∈ [0.3, 0.7] with a straight channel 0.4 mm wide cut into it
+/// from its left face, x < 0.85, |y − 0.5| < [`CHANNEL_HALF_WIDTH`]: a goal at its far end is
+/// left only along it. A step of 0.2 from the goal is free for about one sample direction in
+/// 1,600, a uniform sample lands in it once in 4,500 draws.
+fn channel_free(q: &[f64]) -> bool {
+    let (x, y) = (q[0], q[1]);
+    let block = (0.3..=0.9).contains(&x) && (0.3..=0.7).contains(&y);
+    !block || (x < 0.85 && (y - 0.5).abs() < CHANNEL_HALF_WIDTH)
+}
+
+/// [`channel_free`] with its exact retraction when `retracts`: a state in the block moves
+/// to the nearest free point (outside the block or in the channel), `clearance` inside it.
+struct Channel {
+    retracts: bool,
+    checks: u64,
+}
+
+impl StateValidator for Channel {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        channel_free(q)
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+    fn retract(&mut self, q: &[f64], clearance: f64, _rounds: usize, out: &mut [f64]) -> bool {
+        if !self.retracts {
+            return false;
+        }
+        let (x, y, c) = (q[0], q[1], clearance.min(CHANNEL_HALF_WIDTH / 2.0));
+        // The free boxes: around the block, and the channel shrunk by the clearance.
+        let boxes = [
+            (f64::MIN, 0.3 - c, f64::MIN, f64::MAX),
+            (0.9 + c, f64::MAX, f64::MIN, f64::MAX),
+            (f64::MIN, f64::MAX, f64::MIN, 0.3 - c),
+            (f64::MIN, f64::MAX, 0.7 + c, f64::MAX),
+            (
+                f64::MIN,
+                0.85 - c,
+                0.5 - CHANNEL_HALF_WIDTH + c,
+                0.5 + CHANNEL_HALF_WIDTH - c,
+            ),
+        ];
+        let (nx, ny) = boxes
+            .iter()
+            .map(|&(x0, x1, y0, y1)| (x.clamp(x0, x1), y.clamp(y0, y1)))
+            .min_by(|a, b| f64::hypot(a.0 - x, a.1 - y).total_cmp(&f64::hypot(b.0 - x, b.1 - y)))
+            .expect("five boxes");
+        out.copy_from_slice(&[nx, ny]);
+        self.is_valid(out)
+    }
+}
+
+/// A wedged tree's blocked steps retracted ([`Retraction`]) in [`channel_free`]'s world: the
+/// goal tree's steps along the channel are blocked unless aimed within a few degrees of its
+/// axis, and a blocked step pushed back into the channel lies further along it. Over sixteen
+/// streams, every plan succeeds with and without retraction, with retraction in 0.54 of the
+/// iterations (71,608 against 131,722); a validator that knows no geometry plans exactly as without (the same
+/// iterations: retraction draws no random numbers). Bad settings are
+/// [`PlanError::BadInput`].
+#[test]
+fn channel_goal_birrt_retraction() {
+    let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.8, 0.5]));
+    let with = |retraction| BiRrt {
+        range: Some(0.2),
+        retraction,
+        ..BiRrt::default()
+    };
+    let runs = |birrt: &BiRrt, retracts: bool| {
+        let (mut solved, mut iterations) = (0, 0);
+        for seed in 0..16u64 {
+            let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            let mut world = Channel { retracts, checks: 0 };
+            match birrt
+                .clone()
+                .plan(&mut motion, &mut world, &request, &budget(400_000), &mut rng)
+            {
+                Ok(s) => {
+                    check_solution(
+                        &square(),
+                        PASSAGE_RESOLUTION,
+                        &mut Channel { retracts, checks: 0 },
+                        &request,
+                        &s,
+                    );
+                    solved += 1;
+                    iterations += s.stats.iterations;
+                }
+                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
+                Err(e) => panic!("channel, {birrt:?}: {e}"),
+            }
+        }
+        (solved, iterations)
+    };
+    let on = Some(Retraction::default());
+    let (retracted, without, no_geometry) = (runs(&with(on), true), runs(&with(None), true), runs(&with(on), false));
+    println!(
+        "channel (solved, iterations): retraction {retracted:?}, without {without:?}, no geometry {no_geometry:?}"
+    );
+    assert_eq!((retracted.0, without.0), (16, 16));
+    assert!(
+        10 * retracted.1 < 7 * without.1,
+        "retracted {retracted:?}, without {without:?}"
+    );
+    assert_eq!(no_geometry, without, "no geometry, nothing retracted");
+    for bad in [
+        Retraction {
+            every: 0,
+            ..Retraction::default()
+        },
+        Retraction {
+            rounds: 0,
+            ..Retraction::default()
+        },
+        Retraction {
+            rounds: 65,
+            ..Retraction::default()
+        },
+        Retraction {
+            clearance: -0.01,
+            ..Retraction::default()
+        },
+        Retraction {
+            clearance: f64::NAN,
+            ..Retraction::default()
+        },
+        Retraction {
+            clearance: 1.0,
+            ..Retraction::default()
+        },
+    ] {
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let mut rng = Pcg64Mcg::seed_from_u64(0);
+        let mut world = Channel {
+            retracts: true,
+            checks: 0,
+        };
+        let got = with(Some(bad)).plan(&mut motion, &mut world, &request, &budget(10), &mut rng);
+        assert!(
+            matches!(&got, Err(PlanError::BadInput(m)) if m.contains("retraction")),
             "{bad:?}: {got:?}"
         );
     }

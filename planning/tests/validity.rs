@@ -379,3 +379,43 @@ fn attaching_a_broken_object_is_refused_and_changes_nothing() {
         assert!(v.explain(&FOLDED).is_none_or(|c| !c.to_string().contains("mug")));
     }
 }
+
+/// `retract` pushes a state whose hand sinks a little into the table out of it, by a small
+/// joint move, and checks the result; a valid state stays where it is; zero rounds only
+/// check; bad input is refused.
+#[test]
+fn retraction_pushes_a_state_out_of_the_table() {
+    let table = Obstacle::cuboid("table", Pose::translation(0.5, 0.0, 0.2), Vector::new(0.3, 0.5, 0.02));
+    let mut v = panda(vec![table]);
+    let down = [0.0, 0.9, 0.0, -1.2, 0.0, 2.0, 0.785];
+    // The first state on the way down that touches the table: millimetres deep.
+    let lerp = |t: f64| -> [f64; 7] { std::array::from_fn(|i| FOLDED[i] + t * (down[i] - FOLDED[i])) };
+    let t = (0..=2000)
+        .map(|i| f64::from(i) / 2000.0)
+        .find(|&t| !v.is_valid(&lerp(t)))
+        .expect("the way down meets the table");
+    let q = lerp(t);
+    let mut out = [0.0; 7];
+    let before = v.checks();
+    assert!(v.retract(&q, 0.01, 3, &mut out));
+    assert!(v.is_valid(&out) && v.explain(&out).is_none());
+    let moved = q.iter().zip(&out).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+    assert!(moved > 0.0 && moved < 0.1, "moved {moved} rad");
+    assert!(v.checks() >= before + 2, "each round and the result are checks");
+    // Deeper in: pushed out too, or refused, never left colliding with true.
+    let deep = lerp((t + 0.02).min(1.0));
+    if v.retract(&deep, 0.01, 3, &mut out) {
+        assert!(v.is_valid(&out));
+    }
+    // A valid state stays where it is.
+    assert!(v.retract(&FOLDED, 0.01, 3, &mut out));
+    assert_eq!(out, FOLDED);
+    // Zero rounds: the state as it is, checked.
+    assert!(!v.retract(&q, 0.01, 0, &mut out));
+    assert_eq!(out, q);
+    // Bad input.
+    assert!(!v.retract(&[f64::NAN; 7], 0.01, 3, &mut out));
+    assert!(!v.retract(&q[..3], 0.01, 3, &mut out));
+    assert!(!v.retract(&q, -0.01, 3, &mut out));
+    assert!(!v.retract(&q, f64::NAN, 3, &mut out));
+}

@@ -140,7 +140,26 @@ fn obstacles_view_matches_parry() {
             None => panic!("distance within 10 m expected"),
         }
         assert!(view.distance(&ball, &p, exact * 0.5).is_none() || exact <= 0.0);
+        // Contacts: where the ball overlaps the crate, the same as parry's in world terms.
+        let id = view.first_hit(&ball, &p);
+        match (id, query::contact(&p, &ball, &bp, &cuboid, 0.0).unwrap()) {
+            (Some(id), Some(want)) => {
+                let got = view.contact(id, &ball, &p).expect("a contact where the ball touches");
+                assert!((got.distance - want.dist).abs() < 1e-5, "{got:?} vs {want:?}");
+                assert!((got.normal - want.normal1).length() < 1e-5, "{got:?} vs {want:?}");
+                assert!((got.point - want.point1).length() < 1e-5, "{got:?} vs {want:?}");
+            }
+            (None, _) => assert!(exact > 0.0, "at {x},{y},{z}"),
+            (Some(_), None) => panic!("a hit without a contact at {x},{y},{z}"),
+        }
     }
+    // A contact that parry finds only within the margin is reported as overlap.
+    let near = Pose::translation(1.0, 0.5, 0.56);
+    let loose = world.obstacles_view(&[]).unwrap().with_margin(0.02);
+    let id = loose.first_hit(&ball, &near).expect("within the margin");
+    let c = loose.contact(id, &ball, &near).unwrap();
+    assert!((c.distance - (0.01 - 0.02)).abs() < 1e-5, "{c:?}");
+    assert!(view.contact(id, &ball, &near).is_none(), "apart without a margin");
     // Rays: along -z from above the box centre.
     let top = 0.5f32;
     let (t, id) = view

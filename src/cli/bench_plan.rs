@@ -183,11 +183,11 @@ pub struct BenchPlanArgs {
     /// `docs/planning-log.md`.
     #[arg(long, value_name = "FRACTION")]
     short_steps: Option<f64>,
-    /// BiRRT only: share of a wedged tree's blocked steps pushed out of the obstacles along
-    /// the contact normals (`Retraction::share`), in [0, 1]; 0 turns retraction off. When
-    /// absent: 0.01, the planner's default. See `docs/planning-log.md`.
-    #[arg(long, value_name = "SHARE")]
-    retraction: Option<f64>,
+    /// BiRRT only: one blocked step of a wedged tree in this many is pushed out of the
+    /// obstacles along the contact normals (`Retraction::every`); 0 turns retraction off.
+    /// When absent: 30, the planner's default. See `docs/planning-log.md`.
+    #[arg(long, value_name = "EVERY")]
+    retraction: Option<u64>,
     /// LazyPRM only: whether a wedged start or goal grows greedily, each free growth step going
     /// on towards its sample until blocked (`LazyPrmSettings::tree_connect`): `true` or
     /// `false`. When absent: on for the Fetch, where it solved more of the bookshelf and cage
@@ -289,9 +289,9 @@ fn birrt_for(robot: &str, dof: usize, a: &BenchPlanArgs) -> BiRrt {
             None => Some(ShortSteps::default()),
         },
         retraction: match a.retraction {
-            Some(share) if share <= 0.0 => None,
-            Some(share) => Some(Retraction {
-                share,
+            Some(0) => None,
+            Some(every) => Some(Retraction {
+                every,
                 ..Retraction::default()
             }),
             None => Some(Retraction::default()),
@@ -585,9 +585,6 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     }
     if a.retraction.is_some() && a.planner != PlannerKind::Birrt {
         bail!("--retraction applies to --planner birrt only");
-    }
-    if a.retraction.is_some_and(|s| !(0.0..=1.0).contains(&s)) {
-        bail!("--retraction must be in [0, 1]");
     }
     if a.tree_connect.is_some() && a.planner != PlannerKind::Lazyprm {
         bail!("--tree-connect applies to --planner lazyprm only");

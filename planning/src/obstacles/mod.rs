@@ -28,6 +28,7 @@
 //! ```
 
 mod balls;
+mod contact;
 mod gjk;
 mod scene;
 

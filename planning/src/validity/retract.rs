@@ -5,9 +5,9 @@
 use hearth_kinematics::to_pose;
 use nalgebra::{Point3, Vector3};
 
-use super::{RobotValidity, TOOL_STEP_DAMPING};
 #[cfg(doc)]
 use super::StateValidator;
+use super::{RobotValidity, TOOL_STEP_DAMPING};
 
 /// Scratch of a retraction, sized for the chain once: the damped normal equations
 /// `(JᵀJ + λ²I) Δq = Jᵀe` of the contact rows, so that no round allocates.

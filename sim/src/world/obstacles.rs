@@ -304,7 +304,10 @@ impl Obstacles for WorldObstacles {
     fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
         let co = self.candidate(id.0)?;
         let pos12 = pose.inv_mul(co.position());
-        let c = self.dispatcher().contact(&pos12, shape, co.shape(), self.margin).ok()??;
+        let c = self
+            .dispatcher()
+            .contact(&pos12, shape, co.shape(), self.margin)
+            .ok()??;
         Some(ObstacleContact {
             point: *pose * c.point1,
             normal: pose.rotation * c.normal1,
