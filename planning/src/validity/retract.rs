@@ -2,7 +2,7 @@
 //! into obstacles, pushed out along the contact normals through the contact points'
 //! Jacobians.
 
-use hearth_kinematics::to_pose;
+use hearth_kinematics::{to_pose, to_vector};
 use nalgebra::{Point3, Vector3};
 
 #[cfg(doc)]
@@ -53,7 +53,21 @@ impl RobotValidity {
             let mut contacts = 0;
             for g in 0..self.geometric.len() {
                 let l = self.geometric[g];
-                let Some((k, id)) = self.parts_hit(l, u64::MAX) else {
+                // Links and parts whose bounding balls are clear touch nothing: the exact
+                // tests run on the others alone (the answer is `parts_hit`'s).
+                let ball =
+                    |c: &Point3<f64>, r: f64| self.obstacles.ball_hits(to_vector(&(self.poses[l] * c)), r as f32);
+                if self.broad.radius[l] <= 0.0 || !ball(&self.broad.local_center[l], self.broad.radius[l]) {
+                    continue;
+                }
+                let hit = self.broad.part_range[l].clone().find_map(|k| {
+                    let (c, r) = self.broad.parts[k];
+                    if !ball(&c, r) {
+                        return None;
+                    }
+                    self.part_hits(l, k).map(|id| (k, id))
+                });
+                let Some((k, id)) = hit else {
                     continue;
                 };
                 let (shape, at) = &self.broad.part_shape[k];
