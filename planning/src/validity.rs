@@ -153,6 +153,7 @@ pub trait StateValidator {
         let _ = (q, axis, length, out);
         false
     }
+
     /// Pushes a state whose robot sinks into obstacles out of them, for planners that grow
     /// along narrow channels ([`BiRrt::retraction`](crate::BiRrt::retraction)): writes into
     /// `out` the state reached by up to `rounds` joint steps, each moving the contact points
@@ -2173,6 +2174,9 @@ impl StateValidator for RobotValidity {
         out != q
     }
 
+    /// Each round moves the first touching part of every link that touches an obstacle (the
+    /// links the chain moves; self-collisions are left to the final check). `out` holds the
+    /// state reached, valid or not.
     fn retract(&mut self, q: &[f64], clearance: f64, rounds: usize, out: &mut [f64]) -> bool {
         self.retract_state(q, clearance, rounds, out)
     }
