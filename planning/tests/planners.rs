@@ -506,32 +506,20 @@ fn channel_goal_birrt_retraction() {
         "retracted {retracted:?}, without {without:?}"
     );
     assert_eq!(no_geometry, without, "no geometry, nothing retracted");
-    for bad in [
-        Retraction {
-            every: 0,
-            ..Retraction::default()
-        },
-        Retraction {
-            rounds: 0,
-            ..Retraction::default()
-        },
-        Retraction {
-            rounds: 65,
-            ..Retraction::default()
-        },
-        Retraction {
-            clearance: -0.01,
-            ..Retraction::default()
-        },
-        Retraction {
-            clearance: f64::NAN,
-            ..Retraction::default()
-        },
-        Retraction {
-            clearance: 1.0,
-            ..Retraction::default()
-        },
+    // Bad settings (every, rounds, clearance) are refused before planning.
+    for (every, rounds, clearance) in [
+        (0, 3, 0.01),
+        (30, 0, 0.01),
+        (30, 65, 0.01),
+        (30, 3, -0.01),
+        (30, 3, f64::NAN),
+        (30, 3, 1.0),
     ] {
+        let bad = Retraction {
+            every,
+            rounds,
+            clearance,
+        };
         let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
         let mut rng = Pcg64Mcg::seed_from_u64(0);
         let mut world = Channel {
