@@ -642,8 +642,7 @@ impl BiRrt {
                     let short = self.short_steps.filter(|s| s.wedged(grown.0, grown.1));
                     stepper.range = short.map_or(range, |s| range * s.scale);
                     let mut new = stepper.extend(motion, validator, this, &target);
-                    if new.is_none()
-                        && stepper.blocked
+                    if stepper.blocked
                         && short.is_some()
                         && let Some(r) = &self.retraction
                     {

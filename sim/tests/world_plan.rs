@@ -366,4 +366,12 @@ fn checks_through_the_live_view_do_not_allocate() {
         .collect();
     let mut motions = MotionValidator::new(space, 1.0 / 32.0);
     counting::assert_checks_do_not_allocate("the Fetch's arm over the table", &mut v, &mut motions, &qs);
+    // Retractions through the view (`StateValidator::retract`, its contacts through
+    // `shape_contact`) allocate nothing either, once their states' cells are warm.
+    let mut out = vec![0.0; qs[0].len()];
+    let mut retract_all = |v: &mut RobotValidity| qs.iter().filter(|q| v.retract(q, 0.01, 3, &mut out)).count();
+    let pushed = retract_all(&mut v);
+    let (counted, again) = counting::allocations(|| retract_all(&mut v));
+    assert_eq!(counted, 0, "retraction through the live view allocated");
+    assert_eq!(again, pushed);
 }

@@ -1,16 +1,80 @@
-//! Contacts between convex shapes without allocation: parry's GJK, then its EPA for
-//! overlapping shapes, with the EPA's buffers kept per thread ([`ParryScene`]'s
-//! [`Obstacles::contact`]).
+//! Contacts between shapes for [`Obstacles::contact`], without allocation for convex pairs:
+//! parry's GJK, then its EPA for overlapping shapes, with the EPA's buffers kept per thread.
 
 use std::cell::RefCell;
 
+use parry3d::bounding_volume::BoundingVolume;
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::epa::EPA;
 use parry3d::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
-use parry3d::shape::SupportMap;
+use parry3d::query::{self};
+use parry3d::shape::{Shape, SupportMap};
 
+use super::ObstacleContact;
 #[cfg(doc)]
-use super::{Obstacles, ParryScene};
+use super::Obstacles;
+
+/// Where `shape` at `pose` touches `other` at `other_pose`, counting a gap of up to `margin`
+/// as contact ([`ObstacleContact`], its distance less the margin), or `None`: the answer of
+/// every [`Obstacles::contact`] in the workspace (`ParryScene` and the live world's view).
+/// Balls take parry's closed forms; other convex pairs GJK and the per-thread EPA, which
+/// parry's own `query::contact` would build anew for each overlap; a compound obstacle the
+/// deepest contact of its parts near the shape; the rest (meshes) parry's `query::contact`.
+///
+/// ```
+/// use hearth_planning::obstacles::shape_contact;
+/// use parry3d::math::{Pose, Vector};
+/// use parry3d::shape::Cuboid;
+///
+/// let block = Cuboid::new(Vector::splat(0.1));
+/// let floor = Cuboid::new(Vector::splat(0.5));
+/// let under = Pose::translation(0.0, 0.0, -0.5);
+/// let c = shape_contact(&block, &Pose::translation(0.0, 0.0, 0.08), &floor, &under, 0.0).unwrap();
+/// assert!((c.distance + 0.02).abs() < 1e-6 && (c.normal.z + 1.0).abs() < 1e-6);
+/// assert!(shape_contact(&block, &Pose::translation(0.0, 0.0, 0.15), &floor, &under, 0.0).is_none());
+/// let near = shape_contact(&block, &Pose::translation(0.0, 0.0, 0.15), &floor, &under, 0.1).unwrap();
+/// assert!((near.distance - (0.05 - 0.1)).abs() < 1e-6); // within the margin: overlap
+/// ```
+pub fn shape_contact(
+    shape: &dyn Shape,
+    pose: &Pose,
+    other: &dyn Shape,
+    other_pose: &Pose,
+    margin: Real,
+) -> Option<ObstacleContact> {
+    if let (Some(a), Some(b)) = (shape.as_support_map(), other.as_support_map())
+        && shape.as_ball().is_none()
+        && other.as_ball().is_none()
+    {
+        let (p, n, d) = support_map_contact(&pose.inv_mul(other_pose), a, b, margin)?;
+        return Some(ObstacleContact {
+            point: *pose * p,
+            normal: pose.rotation * n,
+            distance: d - margin,
+        });
+    }
+    if let Some(compound) = other.as_compound() {
+        // The deepest contact among the parts near the shape (parry's compound query builds
+        // an EPA per overlapping part).
+        let near = shape.compute_aabb(pose).loosened(margin);
+        return compound
+            .shapes()
+            .iter()
+            .filter_map(|(at, part)| {
+                let at = *other_pose * *at;
+                part.compute_aabb(&at)
+                    .intersects(&near)
+                    .then(|| shape_contact(shape, pose, part.as_ref(), &at, margin))?
+            })
+            .min_by(|a, b| a.distance.total_cmp(&b.distance));
+    }
+    let c = query::contact(pose, shape, other_pose, other, margin).ok()??;
+    Some(ObstacleContact {
+        point: c.point1,
+        normal: c.normal1,
+        distance: c.dist - margin,
+    })
+}
 
 thread_local! {
     /// The EPA's polytope buffers, reused by every contact this thread asks for (parry's
@@ -22,7 +86,7 @@ thread_local! {
 /// `prediction` apart: `a`'s deepest (or nearest) point, the unit normal from `a` towards `b`
 /// and the signed distance, all in `a`'s frame. The same answer as parry's
 /// `contact_support_map_support_map`.
-pub(super) fn support_map_contact(
+fn support_map_contact(
     pos12: &Pose,
     a: &dyn SupportMap,
     b: &dyn SupportMap,

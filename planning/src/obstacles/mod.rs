@@ -41,6 +41,7 @@ use parry3d::shape::{Shape, SharedShape, TriMeshBuilderError};
 use crate::error::Num;
 
 pub use balls::BallBatch;
+pub use contact::shape_contact;
 pub use scene::ParryScene;
 
 /// The nearest leaf of `bvh` to the box `query` within `max_dist`, for implementations of

@@ -10,10 +10,10 @@ use std::ops::{Add, Mul, Sub};
 
 use wide::f32x8;
 
-use super::contact;
 use super::gjk::{self, Convex};
 use super::{
     BallBatch, Obstacle, ObstacleContact, ObstacleError, ObstacleId, Obstacles, balls_one_by_one, nearest_leaf,
+    shape_contact,
 };
 
 /// Up to this many obstacles, ball queries scan every obstacle's bounding box (eight at a
@@ -1071,25 +1071,7 @@ impl Obstacles for ParryScene {
 
     fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
         let o = self.obstacles.get(id.index())?;
-        // Balls have closed forms in parry; other convex pairs go through GJK and the
-        // per-thread EPA, which parry's own query would build anew for each overlap.
-        if let (Some(a), Some(b)) = (shape.as_support_map(), o.shape.as_support_map())
-            && shape.as_ball().is_none()
-            && o.shape.as_ball().is_none()
-        {
-            let (p, n, d) = contact::support_map_contact(&pose.inv_mul(&o.pose), a, b, self.margin)?;
-            return Some(ObstacleContact {
-                point: *pose * p,
-                normal: pose.rotation * n,
-                distance: d - self.margin,
-            });
-        }
-        let c = query::contact(pose, shape, &o.pose, &*o.shape, self.margin).ok()??;
-        Some(ObstacleContact {
-            point: c.point1,
-            normal: c.normal1,
-            distance: c.dist - self.margin,
-        })
+        shape_contact(shape, pose, &*o.shape, &o.pose, self.margin)
     }
 
     fn name(&self, id: ObstacleId) -> Option<&str> {

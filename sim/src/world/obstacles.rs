@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use hearth_planning::obstacles::{Obstacle, ObstacleContact, ObstacleId, Obstacles, ParryScene, nearest_leaf};
+use hearth_planning::obstacles::{
+    Obstacle, ObstacleContact, ObstacleId, Obstacles, ParryScene, nearest_leaf, shape_contact,
+};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher, Ray};
@@ -303,16 +305,7 @@ impl Obstacles for WorldObstacles {
 
     fn contact(&self, id: ObstacleId, shape: &dyn Shape, pose: &Pose) -> Option<ObstacleContact> {
         let co = self.candidate(id.0)?;
-        let pos12 = pose.inv_mul(co.position());
-        let c = self
-            .dispatcher()
-            .contact(&pos12, shape, co.shape(), self.margin)
-            .ok()??;
-        Some(ObstacleContact {
-            point: *pose * c.point1,
-            normal: pose.rotation * c.normal1,
-            distance: c.dist - self.margin,
-        })
+        shape_contact(shape, pose, co.shape(), co.position(), self.margin)
     }
 
     fn name(&self, id: ObstacleId) -> Option<&str> {
