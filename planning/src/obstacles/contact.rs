@@ -1,5 +1,6 @@
-//! Contacts between shapes for [`Obstacles::contact`], without allocation for convex pairs:
-//! parry's GJK, then its EPA for overlapping shapes, with the EPA's buffers kept per thread.
+//! Contacts between shapes for [`Obstacles::contact`], without allocation for convex pairs and
+//! composite obstacles: parry's GJK, then its EPA for overlapping shapes, with the EPA's
+//! buffers kept per thread.
 
 use std::cell::RefCell;
 
@@ -18,8 +19,10 @@ use super::Obstacles;
 /// as contact ([`ObstacleContact`], its distance less the margin), or `None`: the answer of
 /// every [`Obstacles::contact`] in the workspace (`ParryScene` and the live world's view).
 /// Balls take parry's closed forms; other convex pairs GJK and the per-thread EPA, which
-/// parry's own `query::contact` would build anew for each overlap; a compound obstacle the
-/// deepest contact of its parts near the shape; the rest (meshes) parry's `query::contact`.
+/// parry's own `query::contact` would build anew for each overlap; a composite obstacle (a
+/// triangle mesh, a compound) the deepest contact of its parts near the shape, found by its
+/// own bounding-volume tree; the rest (height fields, composite robot parts) parry's
+/// `query::contact`.
 ///
 /// ```
 /// use hearth_planning::obstacles::shape_contact;
@@ -53,20 +56,23 @@ pub fn shape_contact(
             distance: d - margin,
         });
     }
-    if let Some(compound) = other.as_compound() {
-        // The deepest contact among the parts near the shape (parry's compound query builds
-        // an EPA per overlapping part).
-        let near = shape.compute_aabb(pose).loosened(margin);
-        return compound
-            .shapes()
-            .iter()
-            .filter_map(|(at, part)| {
-                let at = *other_pose * *at;
-                part.compute_aabb(&at)
-                    .intersects(&near)
-                    .then(|| shape_contact(shape, pose, part.as_ref(), &at, margin))?
-            })
-            .min_by(|a, b| a.distance.total_cmp(&b.distance));
+    if let Some(composite) = other.as_composite_shape() {
+        // The deepest contact among the parts (a mesh's triangles, a compound's shapes) that
+        // the composite's own tree finds near the shape, as parry's composite query answers;
+        // each part is a pair for the branches above, so no part builds an EPA.
+        let near = shape.compute_aabb(&other_pose.inv_mul(pose)).loosened(margin);
+        let mut deepest: Option<ObstacleContact> = None;
+        for id in composite.bvh().intersect_aabb(&near) {
+            composite.map_part_at(id, &mut |at, part, _| {
+                let at = at.map_or(*other_pose, |at| *other_pose * *at);
+                if let Some(c) = shape_contact(shape, pose, part, &at, margin)
+                    && deepest.is_none_or(|d| c.distance < d.distance)
+                {
+                    deepest = Some(c);
+                }
+            });
+        }
+        return deepest;
     }
     let c = query::contact(pose, shape, other_pose, other, margin).ok()??;
     Some(ObstacleContact {
@@ -105,10 +111,10 @@ fn support_map_contact(
 
 #[cfg(test)]
 mod tests {
-    use super::support_map_contact;
-    use parry3d::math::{Pose, Vector};
+    use super::{shape_contact, support_map_contact};
+    use parry3d::math::{Pose, Rotation, Vector};
     use parry3d::query;
-    use parry3d::shape::{Cuboid, Cylinder};
+    use parry3d::shape::{Compound, Cuboid, Cylinder, Shape, SharedShape, TriMesh};
 
     /// The same contacts as parry's own query, overlapping, touching within the prediction
     /// and apart.
@@ -137,5 +143,43 @@ mod tests {
                 (w, g) => panic!("at {x},{y},{z}: parry {w:?}, ours {g:?}"),
             }
         }
+    }
+
+    /// Composite obstacles (a triangle mesh, a compound) answer as parry's own composite
+    /// query does: the deepest contact among their parts, or none.
+    #[test]
+    fn composite_contacts_match_parrys() {
+        let (vertices, indices) = Cuboid::new(Vector::new(0.4, 0.3, 0.05)).to_trimesh();
+        let mesh = TriMesh::new(vertices, indices).unwrap();
+        let compound = Compound::new(vec![
+            (Pose::translation(0.0, 0.0, 0.0), SharedShape::cuboid(0.4, 0.3, 0.05)),
+            (Pose::translation(0.3, 0.0, 0.2), SharedShape::cylinder(0.2, 0.05)),
+        ]);
+        let at = Pose::from_parts(Vector::new(0.1, -0.2, 0.4), Rotation::from_rotation_z(0.3));
+        let a = Cylinder::new(0.1, 0.04);
+        let mut answered = 0;
+        for other in [&mesh as &dyn Shape, &compound] {
+            for (x, y, z, angle) in [
+                (0.1, -0.2, 0.47, 0.3),
+                (0.2, -0.1, 0.52, 1.1),
+                (0.35, -0.2, 0.6, -0.4),
+                (0.1, -0.2, 0.62, 0.0),
+                (1.5, 1.5, 1.5, 0.2),
+            ] {
+                let pose = Pose::from_parts(Vector::new(x, y, z), Rotation::from_rotation_x(angle));
+                let want = query::contact(&pose, &a, &at, other, 0.02).unwrap();
+                match (want, shape_contact(&a, &pose, other, &at, 0.02)) {
+                    (None, None) => {}
+                    (Some(w), Some(c)) => {
+                        answered += 1;
+                        assert!((w.dist - 0.02 - c.distance).abs() < 1e-5, "{w:?} against {c:?}");
+                        assert!((w.normal1 - c.normal).length() < 1e-4, "{w:?} against {c:?}");
+                        assert!((w.point1 - c.point).length() < 1e-4, "{w:?} against {c:?}");
+                    }
+                    (w, g) => panic!("at {x},{y},{z}: parry {w:?}, ours {g:?}"),
+                }
+            }
+        }
+        assert!(answered >= 4, "only {answered} contacts to compare");
     }
 }
