@@ -75,6 +75,10 @@ const BYPASS_CHECKS: u64 = 4;
 /// the tries grow geometrically from one to the other.
 const BYPASS_REACH: [f64; 2] = [0.005, 0.2];
 
+/// Clearances (m) to which [`retracted_bypass`] pushes a grazed state out of the obstacle it
+/// touches, nearest first, and the retraction rounds of each push.
+const RETRACTED_BYPASS: ([f64; 3], usize) = ([0.005, 0.01, 0.02], 3);
+
 /// How long to shortcut and how carefully.
 ///
 /// ```
@@ -427,8 +431,10 @@ pub fn parabolic<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 }
 
 /// Makes a path valid at a finer resolution: every edge is checked at `fine_resolution`, and
-/// an edge that fails is replaced by a BiRRT path between its ends planned at that resolution
-/// (within `budget` for all repairs together). Returns the path and the number of edges
+/// an edge that fails goes through one waypoint near its first colliding state (a random
+/// sideways move, or that state pushed out of the obstacle along the contact normal when the
+/// validator can [retract](StateValidator::retract)), or else is replaced by a BiRRT path
+/// between its ends planned at that resolution (within `budget` for all repairs together). Returns the path and the number of edges
 /// repaired; fails with [`PlanError::Timeout`] when a repair does not succeed, and with
 /// [`PlanError::BadInput`] when `fine_resolution` is not positive and finite, or finer than
 /// [`finest_resolution`](crate::motion::finest_resolution).
@@ -501,8 +507,8 @@ pub fn repair<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 }
 
 /// The states strictly between `ends` of a motion that replaces the straight one between them
-/// and passes `fine`: one sideways waypoint near `graze` ([`bypass`]) when there is a graze
-/// and one is found, else a BiRRT path planned at `fine`'s resolution with a step of a quarter
+/// and passes `fine`: one sideways waypoint near `graze` ([`bypass`], then
+/// [`retracted_bypass`]) when there is a graze and one is found, else a BiRRT path planned at `fine`'s resolution with a step of a quarter
 /// of the edge (at least 10 × `resolution`, at most 0.25) within `budget` (at least 1 ms).
 fn reroute<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
     fine: &mut MotionValidator<S>,
@@ -515,7 +521,8 @@ fn reroute<S: Space + Clone, V: StateValidator + ?Sized, R: Rng + ?Sized>(
 ) -> Result<Vec<Vec<f64>>, PlanError> {
     let space = fine.space().clone();
     if let Some(graze) = graze
-        && let Some(via) = bypass(&space, fine, validator, ends, graze, rng)
+        && let Some(via) =
+            bypass(&space, fine, validator, ends, graze, rng).or_else(|| retracted_bypass(fine, validator, ends, graze))
     {
         return Ok(vec![via]);
     }
@@ -584,6 +591,29 @@ fn bypass<S: Space, V: StateValidator + ?Sized, R: Rng + ?Sized>(
         }
     }
     None
+}
+
+/// The grazed state pushed out of the obstacle it touches ([`StateValidator::retract`]) to
+/// each clearance of [`RETRACTED_BYPASS`] in turn, as a waypoint `via` such that
+/// `ends[0] → via → ends[1]` passes `fine`; tried after [`bypass`]'s random sideways moves,
+/// before a re-plan. Where an end sits in a pocket (a Fetch grasp deep in the cage), the
+/// random moves can all fail and the re-plan at the fine spacing run out of time, while the
+/// contact's normal points the short way out. Validators that know no geometry retract
+/// nothing, so for them this adds no work and no random draw.
+fn retracted_bypass<S: Space, V: StateValidator + ?Sized>(
+    fine: &mut MotionValidator<S>,
+    validator: &mut V,
+    ends: [&[f64]; 2],
+    graze: &[f64],
+) -> Option<Vec<f64>> {
+    let mut via = vec![0.0; graze.len()];
+    let (clearances, rounds) = RETRACTED_BYPASS;
+    clearances.into_iter().find_map(|clearance| {
+        (validator.retract(graze, clearance, rounds, &mut via)
+            && fine.check_motion(validator, ends[0], &via)
+            && fine.check_motion(validator, &via, ends[1]))
+        .then(|| via.clone())
+    })
 }
 
 /// Which shortcutting [`smooth`] applies; serde names are lowercase (`"none"`, `"random"`,
@@ -950,7 +980,7 @@ fn invalid_motion(e: TrajectoryError) -> PlanError {
 mod tests {
     use rand::SeedableRng;
 
-    use super::{BYPASS_CHECKS, bypass};
+    use super::{BYPASS_CHECKS, RETRACTED_BYPASS, bypass, first_collision, retracted_bypass};
     use crate::motion::MotionValidator;
     use crate::space::JointSpace;
     use crate::validity::StateValidator;
@@ -989,5 +1019,58 @@ mod tests {
                 wall.0
             );
         }
+    }
+
+    /// A disc of radius 0.1 whose top the line y = 0.5 cuts 1 mm deep, with exact retraction:
+    /// a state inside moves radially out to `clearance` beyond the rim.
+    struct Disc(u64);
+
+    const DISC: ([f64; 2], f64) = ([0.5, 0.401], 0.1);
+
+    impl StateValidator for Disc {
+        fn is_valid(&mut self, q: &[f64]) -> bool {
+            self.0 += 1;
+            (q[0] - DISC.0[0]).hypot(q[1] - DISC.0[1]) >= DISC.1
+        }
+        fn checks(&self) -> u64 {
+            self.0
+        }
+        fn retract(&mut self, q: &[f64], clearance: f64, _: usize, out: &mut [f64]) -> bool {
+            let (dx, dy) = (q[0] - DISC.0[0], q[1] - DISC.0[1]);
+            let d = dx.hypot(dy);
+            if d == 0.0 {
+                return false;
+            }
+            let r = (DISC.1 + clearance).max(d);
+            out[0] = DISC.0[0] + dx * r / d;
+            out[1] = DISC.0[1] + dy * r / d;
+            self.is_valid(out)
+        }
+    }
+
+    /// The grazed state pushed out along the contact normal to the first clearance makes a
+    /// waypoint whose two edges pass the fine check; a validator without geometry gets none,
+    /// at the cost of no check.
+    #[test]
+    fn a_graze_is_bypassed_along_the_contact_normal() {
+        let space = JointSpace::new(&[0.0; 2], &[1.0; 2], &[false; 2]).unwrap();
+        let mut fine = MotionValidator::new(space.clone(), 0.001);
+        let ends: [&[f64]; 2] = [&[0.1, 0.5], &[0.9, 0.5]];
+        assert!(!fine.check_motion(&mut Disc(0), ends[0], ends[1]));
+        let graze = first_collision(&space, &mut Disc(0), ends[0], ends[1], 0.001).unwrap();
+        let via = retracted_bypass(&mut fine, &mut Disc(0), ends, &graze).expect("a waypoint");
+        let rim = (via[0] - DISC.0[0]).hypot(via[1] - DISC.0[1]);
+        assert!(
+            (rim - DISC.1 - RETRACTED_BYPASS.0[0]).abs() < 1e-9,
+            "{via:?}: {rim} from the centre"
+        );
+        assert!(
+            (via[0] - graze[0]).hypot(via[1] - graze[1]) < 0.01,
+            "{via:?} far from {graze:?}"
+        );
+        assert!(fine.check_motion(&mut Disc(0), ends[0], &via) && fine.check_motion(&mut Disc(0), &via, ends[1]));
+        let mut wall = Wall(0);
+        assert_eq!(retracted_bypass(&mut fine, &mut wall, ends, &[0.5, 0.5005]), None);
+        assert_eq!(wall.0, 0, "no geometry, no checks");
     }
 }

@@ -20,9 +20,9 @@ use super::Obstacles;
 /// every [`Obstacles::contact`] in the workspace (`ParryScene` and the live world's view).
 /// Balls take parry's closed forms; other convex pairs GJK and the per-thread EPA, which
 /// parry's own `query::contact` would build anew for each overlap; a composite obstacle (a
-/// triangle mesh, a compound) the deepest contact of its parts near the shape, found by its
-/// own bounding-volume tree; the rest (height fields, composite robot parts) parry's
-/// `query::contact`.
+/// triangle mesh, a polyline, a compound) the deepest contact of its parts near the shape,
+/// found by its own bounding-volume tree; the rest (height fields, composite robot parts)
+/// parry's `query::contact`.
 ///
 /// ```
 /// use hearth_planning::obstacles::shape_contact;
