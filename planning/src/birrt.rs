@@ -128,7 +128,7 @@ impl Default for Retraction {
 }
 
 impl Retraction {
-    fn validate(&self) -> Result<(), PlanError> {
+    pub(crate) fn validate(&self) -> Result<(), PlanError> {
         if self.every == 0 || !(1..=64).contains(&self.rounds) || !(0.0..1.0).contains(&self.clearance) {
             return Err(PlanError::BadInput(format!(
                 "retraction {self:?}: `every` must be at least 1, `rounds` in 1..=64 and `clearance` in [0, 1) m"

@@ -3,6 +3,7 @@
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
+use crate::birrt::Retraction;
 use crate::error::PlanError;
 use crate::motion::MotionValidator;
 use crate::planner::{
@@ -61,7 +62,28 @@ pub struct Rrt {
     pub goal_zone: f64,
     /// Radius of the goal zone as a fraction of `range`.
     pub goal_zone_radius: f64,
+    /// Retraction of goal-zone samples that land in obstacles: one in
+    /// [`every`](Retraction::every) zone samples that are within a step of the tree (so
+    /// checked themselves) and collide is pushed out of the obstacles along the contact
+    /// normals ([`StateValidator::retract`]); when the pushed state is valid, the tree steers
+    /// towards it instead of drawing again. Near a goal wedged between obstacles most zone
+    /// samples collide, and the pushed ones lie beside the walls around the goal, where the
+    /// tree has to pass. Validators that know no geometry retract nothing, so their plans are
+    /// the same with or without it. `None` turns it off ([`Rrt::ompl`]). Measured on the
+    /// MotionBenchMaker Panda problems with the benchmark's 6 rad step
+    /// (`docs/planning-log.md`, fifty-seventh round): 1,656 of 1,677 plans within 1 s over
+    /// seeds 0–2 against 1,643, bookshelf_small 94.9 % against 91.9 %, at medians 13–21 %
+    /// higher.
+    pub zone_retraction: Option<Retraction>,
 }
+
+/// [`Rrt::zone_retraction`]'s default: one colliding goal-zone sample in four, three joint
+/// steps, 1 cm beyond the surfaces.
+const ZONE_RETRACTION: Retraction = Retraction {
+    every: 4,
+    rounds: 3,
+    clearance: 0.01,
+};
 
 impl Default for Rrt {
     fn default() -> Self {
@@ -70,21 +92,23 @@ impl Default for Rrt {
             goal_bias: 0.05,
             goal_zone: 0.1,
             goal_zone_radius: 0.3,
+            zone_retraction: Some(ZONE_RETRACTION),
         }
     }
 }
 
 impl Rrt {
-    /// OMPL's `RRT`: goal bias 0.05, no goal zone, step `range`.
+    /// OMPL's `RRT`: goal bias 0.05, no goal zone (so no zone retraction), step `range`.
     ///
     /// ```
     /// let rrt = hearth_planning::Rrt::ompl(None);
-    /// assert_eq!((rrt.goal_bias, rrt.goal_zone), (0.05, 0.0));
+    /// assert_eq!((rrt.goal_bias, rrt.goal_zone, rrt.zone_retraction), (0.05, 0.0, None));
     /// ```
     pub fn ompl(range: Option<f64>) -> Self {
         Self {
             range,
             goal_zone: 0.0,
+            zone_retraction: None,
             ..Self::default()
         }
     }
@@ -112,6 +136,9 @@ impl<S: Space> Planner<S> for Rrt {
             )));
         }
         positive_finite("goal_zone_radius", self.goal_zone_radius)?;
+        if let Some(r) = &self.zone_retraction {
+            r.validate()?;
+        }
         let mut run = Run::start(budget, motion, validator)?;
         let space = motion.space();
         let range = resolve_range(space, self.range, 1.0)?;
@@ -124,6 +151,8 @@ impl<S: Space> Planner<S> for Rrt {
         // Direct connection first, when a goal is within range.
         let mut newest = Some(0);
         let mut last = 0;
+        // Colliding goal-zone samples, counted for [`Retraction::every`].
+        let mut colliding = 0u64;
         loop {
             if let Some(i) = newest.take()
                 && let Some(g) = nearest_goal(motion.space(), &goals, tree.state(i), range)
@@ -163,13 +192,25 @@ impl<S: Space> Planner<S> for Rrt {
             let reaches =
                 space.distance(tree.state(0), &target) <= range || space.distance(tree.state(last), &target) <= range;
             if reaches && !validator.is_valid(&target) {
-                continue;
+                // A goal-zone sample in an obstacle: pushed out, it may still serve.
+                let zone = pick >= self.goal_bias && pick < self.goal_bias + self.goal_zone;
+                let Some(r) = self.zone_retraction.as_ref().filter(|_| zone) else {
+                    continue;
+                };
+                colliding += 1;
+                if !colliding.is_multiple_of(r.every) || !validator.retract(&target, r.clearance, r.rounds, &mut step) {
+                    continue;
+                }
+                target.copy_from_slice(&step);
             }
             let near = tree.nn.nearest(space, &target).expect("the tree holds the start");
-            if steer(space, tree.state(near), &target, range, &mut step) == 0.0 {
+            let d = steer(space, tree.state(near), &target, range, &mut step);
+            if d == 0.0 {
                 continue;
             }
-            if !reaches && !validator.is_valid(&step) {
+            // A reached target was checked (or retracted to a valid state); a step short of a
+            // retracted one was not.
+            if (!reaches || d > range) && !validator.is_valid(&step) {
                 continue;
             }
             if !motion.check_motion(validator, tree.state(near), &step) {

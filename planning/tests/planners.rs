@@ -534,6 +534,140 @@ fn channel_goal_birrt_retraction() {
     }
 }
 
+/// Half the width of [`Elbow`]'s channel.
+const ELBOW_HALF_WIDTH: f64 = 0.02;
+
+/// [`channel_free`]'s block with a channel 4 cm wide that turns a corner: in from the left
+/// face along y = 0.5 to x = 0.72, then up along x = 0.7 to y = 0.66. A goal at the top of the
+/// upright leg is seen from no state outside the block. With its exact retraction when
+/// `retracts`: a state in the block moves to the nearest free point, `clearance` inside it.
+struct Elbow {
+    retracts: bool,
+    checks: u64,
+}
+
+impl Elbow {
+    /// The free boxes `(x0, x1, y0, y1)`, each shrunk by `c`: around the block, then the two
+    /// legs.
+    fn free_boxes(c: f64) -> [(f64, f64, f64, f64); 6] {
+        let h = ELBOW_HALF_WIDTH;
+        [
+            (f64::MIN, 0.3 - c, f64::MIN, f64::MAX),
+            (0.9 + c, f64::MAX, f64::MIN, f64::MAX),
+            (f64::MIN, f64::MAX, f64::MIN, 0.3 - c),
+            (f64::MIN, f64::MAX, 0.7 + c, f64::MAX),
+            (f64::MIN, 0.72 - c, 0.5 - h + c, 0.5 + h - c),
+            (0.7 - h + c, 0.7 + h - c, 0.5 - h + c, 0.66 - c),
+        ]
+    }
+}
+
+impl StateValidator for Elbow {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        let inside = |(x0, x1, y0, y1): (f64, f64, f64, f64)| (x0..x1).contains(&q[0]) && (y0..y1).contains(&q[1]);
+        Self::free_boxes(0.0).into_iter().any(inside)
+    }
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+    fn retract(&mut self, q: &[f64], clearance: f64, _rounds: usize, out: &mut [f64]) -> bool {
+        if !self.retracts {
+            return false;
+        }
+        let (x, y) = (q[0], q[1]);
+        let (nx, ny) = Self::free_boxes(clearance.min(ELBOW_HALF_WIDTH / 2.0))
+            .iter()
+            .map(|&(x0, x1, y0, y1)| (x.clamp(x0, x1), y.clamp(y0, y1)))
+            .min_by(|a, b| f64::hypot(a.0 - x, a.1 - y).total_cmp(&f64::hypot(b.0 - x, b.1 - y)))
+            .expect("six boxes");
+        out.copy_from_slice(&[nx, ny]);
+        self.is_valid(out)
+    }
+}
+
+/// RRT's goal-zone samples that land in [`Elbow`]'s block retracted
+/// ([`Rrt::zone_retraction`]) with a step longer than the square, as the benchmark's RRT takes
+/// for the robots (so every sample is within a step of the tree and checked itself): most
+/// pushed samples land in the channel's legs, where uniform and zone samples seldom fall, and
+/// one at the corner sees the goal. Over sixteen streams with every colliding zone sample
+/// retracted, every plan succeeds, in 0.65 of the iterations without (14,841 against 23,003); a
+/// validator that knows no geometry plans exactly as without (retraction draws no random
+/// numbers). Bad settings are [`PlanError::BadInput`].
+#[test]
+fn elbow_goal_rrt_zone_retraction() {
+    let request = PlanRequest::new(vec![0.1, 0.1], Goal::Config(vec![0.7, 0.64]));
+    let with = |zone_retraction| Rrt {
+        range: Some(2.0),
+        zone_retraction,
+        ..Rrt::default()
+    };
+    let runs = |rrt: &Rrt, retracts: bool| {
+        let (mut solved, mut iterations) = (0, 0);
+        for seed in 0..16u64 {
+            let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+            let mut rng = Pcg64Mcg::seed_from_u64(seed);
+            let mut world = Elbow { retracts, checks: 0 };
+            match rrt
+                .clone()
+                .plan(&mut motion, &mut world, &request, &budget(400_000), &mut rng)
+            {
+                Ok(s) => {
+                    let mut check = Elbow { retracts, checks: 0 };
+                    check_solution(&square(), PASSAGE_RESOLUTION, &mut check, &request, &s);
+                    solved += 1;
+                    iterations += s.stats.iterations;
+                }
+                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
+                Err(e) => panic!("elbow, {rrt:?}: {e}"),
+            }
+        }
+        (solved, iterations)
+    };
+    let every = Some(Retraction {
+        every: 1,
+        ..Retraction::default()
+    });
+    let (retracted, without, no_geometry) = (
+        runs(&with(every), true),
+        runs(&with(None), true),
+        runs(&with(every), false),
+    );
+    println!(
+        "elbow RRT (solved, iterations): zone retraction {retracted:?}, without {without:?}, no geometry {no_geometry:?}"
+    );
+    assert_eq!(retracted.0, 16, "retracted {retracted:?}");
+    assert!(
+        retracted.0 >= without.0 && 5 * retracted.1 < 4 * without.1,
+        "retracted {retracted:?}, without {without:?}"
+    );
+    assert_eq!(no_geometry, without, "no geometry, nothing retracted");
+    for bad in [(0, 3, 0.01), (1, 0, 0.01), (1, 3, f64::NAN)] {
+        let (every, rounds, clearance) = bad;
+        let rrt = with(Some(Retraction {
+            every,
+            rounds,
+            clearance,
+        }));
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let mut world = Elbow {
+            retracts: true,
+            checks: 0,
+        };
+        let got = rrt.clone().plan(
+            &mut motion,
+            &mut world,
+            &request,
+            &budget(10),
+            &mut Pcg64Mcg::seed_from_u64(0),
+        );
+        assert!(
+            matches!(&got, Err(PlanError::BadInput(m)) if m.contains("retraction")),
+            "{bad:?}: {got:?}"
+        );
+    }
+}
+
 /// In [`pocket`], a helper can wall itself in: once it fills the corridor's far end, its
 /// states there are the nearest to almost every sample and no step from them is free, while
 /// the hole starts at the other end. Dropping a helper that has stopped growing
@@ -1152,6 +1286,7 @@ fn bad_input_is_named() {
             goal_bias,
             goal_zone,
             goal_zone_radius,
+            ..Rrt::default()
         };
         let before = v.checks();
         assert!(

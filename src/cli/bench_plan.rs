@@ -183,9 +183,13 @@ pub struct BenchPlanArgs {
     /// `docs/planning-log.md`.
     #[arg(long, value_name = "FRACTION")]
     short_steps: Option<f64>,
-    /// BiRRT only: one blocked step of a wedged tree in this many is pushed out of the
-    /// obstacles along the contact normals (`Retraction::every`); 0 turns retraction off.
-    /// When absent: 30, the planner's default. See `docs/planning-log.md`.
+    /// BiRRT and RRT: retraction out of the obstacles along the contact normals
+    /// (`Retraction::every`), 0 off. BiRRT: one blocked step of a wedged tree in this many is
+    /// pushed out (when absent: 30, the planner's default). RRT: one in this many goal-zone
+    /// samples that land in an obstacle (`Rrt::zone_retraction`; when absent: 4, the
+    /// planner's default, for the Panda and other robots, and off for the Fetch, whose tables
+    /// and box it slowed 1.5–1.8× without solving more of bookshelf_small). See
+    /// `docs/planning-log.md`.
     #[arg(long, value_name = "EVERY")]
     retraction: Option<u64>,
     /// LazyPRM only: whether a wedged start or goal grows greedily, each free growth step going
@@ -350,7 +354,9 @@ fn escape_for(a: &BenchPlanArgs) -> Option<Escape> {
 /// bookshelves over seeds 0–5, 1,055 against 1,038 of 1,122 plans, no fewer with any seed
 /// (bookshelf_tall 95.8 % or more with every seed, against 94.8 % with two), and on its other
 /// five families 735 against 730 of 744 over seeds 0 and 1 (forty-seventh round).
-fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
+/// `retraction` retracts one colliding goal-zone sample in that many (0: none); when absent,
+/// the planner's default, except for the Fetch: none (fifty-seventh round).
+fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>, retraction: Option<u64>) -> Rrt {
     let planner = Rrt::default();
     let (default_range, default_zone, goal_zone_radius) = match robot {
         "fetch" | "panda" => (Some(6.0), 0.8, 0.45),
@@ -360,6 +366,14 @@ fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>) -> Rrt {
         range: range.or(default_range),
         goal_zone: goal_zone.unwrap_or(default_zone),
         goal_zone_radius,
+        zone_retraction: match (retraction, robot) {
+            (Some(0), _) | (None, "fetch") => None,
+            (Some(every), _) => Some(Retraction {
+                every,
+                ..planner.zone_retraction.unwrap_or_default()
+            }),
+            (None, _) => planner.zone_retraction,
+        },
         ..planner
     }
 }
@@ -583,8 +597,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     if a.short_steps.is_some_and(|s| !(s > 0.0 && s <= 1.0)) {
         bail!("--short-steps must be in (0, 1]");
     }
-    if a.retraction.is_some() && a.planner != PlannerKind::Birrt {
-        bail!("--retraction applies to --planner birrt only");
+    if a.retraction.is_some() && a.planner == PlannerKind::Lazyprm {
+        bail!("--retraction applies to --planner birrt and rrt only");
     }
     if a.tree_connect.is_some() && a.planner != PlannerKind::Lazyprm {
         bail!("--tree-connect applies to --planner lazyprm only");
@@ -670,11 +684,16 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
                     format!("BiRRT step {range}, {connect} connection{schedule}")
                 }
                 PlannerKind::Rrt => {
-                    let rrt = rrt_for(&set.robot, a.range, a.goal_zone);
+                    let rrt = rrt_for(&set.robot, a.range, a.goal_zone, a.retraction);
                     let range = step_text(rrt.range);
                     format!(
-                        "RRT step {range}, goal zone {} within {} of the step",
-                        rrt.goal_zone, rrt.goal_zone_radius
+                        "RRT step {range}, goal zone {} within {} of the step, {}",
+                        rrt.goal_zone,
+                        rrt.goal_zone_radius,
+                        rrt.zone_retraction.map_or_else(
+                            || "no zone retraction".to_owned(),
+                            |r| format!("one colliding zone sample in {} retracted", r.every)
+                        )
                     )
                 }
                 PlannerKind::Lazyprm => {
@@ -719,7 +738,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
         };
         let (birrt, rrt) = (
             birrt_for(&set.robot, set.joint_names.len(), &a),
-            rrt_for(&set.robot, a.range, a.goal_zone),
+            rrt_for(&set.robot, a.range, a.goal_zone, a.retraction),
         );
         for problem in &set.problems {
             for rep in 0..a.repeat {
