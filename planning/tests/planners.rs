@@ -443,14 +443,49 @@ impl StateValidator for Channel {
                 0.5 + CHANNEL_HALF_WIDTH - c,
             ),
         ];
-        let (nx, ny) = boxes
-            .iter()
-            .map(|&(x0, x1, y0, y1)| (x.clamp(x0, x1), y.clamp(y0, y1)))
-            .min_by(|a, b| f64::hypot(a.0 - x, a.1 - y).total_cmp(&f64::hypot(b.0 - x, b.1 - y)))
-            .expect("five boxes");
-        out.copy_from_slice(&[nx, ny]);
+        out.copy_from_slice(&nearest_in_boxes(&boxes, x, y));
         self.is_valid(out)
     }
+}
+
+/// The point of the boxes `(x0, x1, y0, y1)` nearest to `(x, y)`: the exact retraction of
+/// the test worlds whose free space is a union of boxes.
+fn nearest_in_boxes(boxes: &[(f64, f64, f64, f64)], x: f64, y: f64) -> [f64; 2] {
+    let (nx, ny) = boxes
+        .iter()
+        .map(|&(x0, x1, y0, y1)| (x.clamp(x0, x1), y.clamp(y0, y1)))
+        .min_by(|a, b| f64::hypot(a.0 - x, a.1 - y).total_cmp(&f64::hypot(b.0 - x, b.1 - y)))
+        .expect("at least one box");
+    [nx, ny]
+}
+
+/// Plans `request` in the unit square over sixteen streams (seeds 0–15, 400,000 iterations
+/// each) with a fresh `planner` and a fresh validator from `world` for each, checks every
+/// solution against another fresh validator, and returns the plans solved and the iterations
+/// of all sixteen together.
+fn sixteen_streams<P: Planner<JointSpace> + Clone + std::fmt::Debug, V: StateValidator>(
+    planner: &P,
+    world: impl Fn() -> V,
+    request: &PlanRequest,
+) -> (usize, u64) {
+    let (mut solved, mut iterations) = (0, 0);
+    for seed in 0..16u64 {
+        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        match planner
+            .clone()
+            .plan(&mut motion, &mut world(), request, &budget(400_000), &mut rng)
+        {
+            Ok(s) => {
+                check_solution(&square(), PASSAGE_RESOLUTION, &mut world(), request, &s);
+                solved += 1;
+                iterations += s.stats.iterations;
+            }
+            Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
+            Err(e) => panic!("{planner:?}: {e}"),
+        }
+    }
+    (solved, iterations)
 }
 
 /// A wedged tree's blocked steps retracted ([`Retraction`]) in [`channel_free`]'s world: the
@@ -468,33 +503,7 @@ fn channel_goal_birrt_retraction() {
         retraction,
         ..BiRrt::default()
     };
-    let runs = |birrt: &BiRrt, retracts: bool| {
-        let (mut solved, mut iterations) = (0, 0);
-        for seed in 0..16u64 {
-            let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
-            let mut rng = Pcg64Mcg::seed_from_u64(seed);
-            let mut world = Channel { retracts, checks: 0 };
-            match birrt
-                .clone()
-                .plan(&mut motion, &mut world, &request, &budget(400_000), &mut rng)
-            {
-                Ok(s) => {
-                    check_solution(
-                        &square(),
-                        PASSAGE_RESOLUTION,
-                        &mut Channel { retracts, checks: 0 },
-                        &request,
-                        &s,
-                    );
-                    solved += 1;
-                    iterations += s.stats.iterations;
-                }
-                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
-                Err(e) => panic!("channel, {birrt:?}: {e}"),
-            }
-        }
-        (solved, iterations)
-    };
+    let runs = |birrt: &BiRrt, retracts: bool| sixteen_streams(birrt, || Channel { retracts, checks: 0 }, &request);
     let on = Some(Retraction::default());
     let (retracted, without, no_geometry) = (runs(&with(on), true), runs(&with(None), true), runs(&with(on), false));
     println!(
@@ -575,13 +584,8 @@ impl StateValidator for Elbow {
         if !self.retracts {
             return false;
         }
-        let (x, y) = (q[0], q[1]);
-        let (nx, ny) = Self::free_boxes(clearance.min(ELBOW_HALF_WIDTH / 2.0))
-            .iter()
-            .map(|&(x0, x1, y0, y1)| (x.clamp(x0, x1), y.clamp(y0, y1)))
-            .min_by(|a, b| f64::hypot(a.0 - x, a.1 - y).total_cmp(&f64::hypot(b.0 - x, b.1 - y)))
-            .expect("six boxes");
-        out.copy_from_slice(&[nx, ny]);
+        let boxes = Self::free_boxes(clearance.min(ELBOW_HALF_WIDTH / 2.0));
+        out.copy_from_slice(&nearest_in_boxes(&boxes, q[0], q[1]));
         self.is_valid(out)
     }
 }
@@ -602,28 +606,7 @@ fn elbow_goal_rrt_zone_retraction() {
         zone_retraction,
         ..Rrt::default()
     };
-    let runs = |rrt: &Rrt, retracts: bool| {
-        let (mut solved, mut iterations) = (0, 0);
-        for seed in 0..16u64 {
-            let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
-            let mut rng = Pcg64Mcg::seed_from_u64(seed);
-            let mut world = Elbow { retracts, checks: 0 };
-            match rrt
-                .clone()
-                .plan(&mut motion, &mut world, &request, &budget(400_000), &mut rng)
-            {
-                Ok(s) => {
-                    let mut check = Elbow { retracts, checks: 0 };
-                    check_solution(&square(), PASSAGE_RESOLUTION, &mut check, &request, &s);
-                    solved += 1;
-                    iterations += s.stats.iterations;
-                }
-                Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
-                Err(e) => panic!("elbow, {rrt:?}: {e}"),
-            }
-        }
-        (solved, iterations)
-    };
+    let runs = |rrt: &Rrt, retracts: bool| sixteen_streams(rrt, || Elbow { retracts, checks: 0 }, &request);
     let every = Some(Retraction {
         every: 1,
         ..Retraction::default()
