@@ -335,23 +335,7 @@ fn pocketed_goal_escape(label: &str, connect: Connect) {
 /// streams, each within 400,000 iterations.
 fn pocket_runs(birrt: &BiRrt) -> (usize, u64) {
     let request = PlanRequest::new(vec![20.0, 20.0], Goal::Config(vec![100.88, 100.5]));
-    let (mut solved, mut iterations) = (0, 0);
-    for seed in 0..16u64 {
-        let mut motion = MotionValidator::new(pocket_space(), POCKET_RESOLUTION);
-        let mut rng = Pcg64Mcg::seed_from_u64(seed);
-        match birrt
-            .clone()
-            .plan(&mut motion, &mut pocket(), &request, &budget(400_000), &mut rng)
-        {
-            Ok(s) => {
-                solved += 1;
-                iterations += s.stats.iterations;
-            }
-            Err(PlanError::Timeout { stats }) => iterations += stats.iterations,
-            Err(e) => panic!("pocket, {birrt:?}: {e}"),
-        }
-    }
-    (solved, iterations)
+    sixteen_streams(birrt, (pocket_space(), POCKET_RESOLUTION), pocket, &request, false)
 }
 
 /// A wedged tree's shorter steps ([`ShortSteps`]) in [`pocket`]: steps of 0.16 fit along the
@@ -459,25 +443,29 @@ fn nearest_in_boxes(boxes: &[(f64, f64, f64, f64)], x: f64, y: f64) -> [f64; 2] 
     [nx, ny]
 }
 
-/// Plans `request` in the unit square over sixteen streams (seeds 0–15, 400,000 iterations
-/// each) with a fresh `planner` and a fresh validator from `world` for each, checks every
-/// solution against another fresh validator, and returns the plans solved and the iterations
-/// of all sixteen together.
+/// Plans `request` in `space` over sixteen streams (seeds 0–15, 400,000 iterations each) with
+/// a fresh `planner` and a fresh validator from `world` for each, edges checked at
+/// `resolution`; when `check`, every solution is checked against another fresh validator.
+/// Returns the plans solved and the iterations of all sixteen together.
 fn sixteen_streams<P: Planner<JointSpace> + Clone + std::fmt::Debug, V: StateValidator>(
     planner: &P,
+    (space, resolution): (JointSpace, f64),
     world: impl Fn() -> V,
     request: &PlanRequest,
+    check: bool,
 ) -> (usize, u64) {
     let (mut solved, mut iterations) = (0, 0);
     for seed in 0..16u64 {
-        let mut motion = MotionValidator::new(square(), PASSAGE_RESOLUTION);
+        let mut motion = MotionValidator::new(space.clone(), resolution);
         let mut rng = Pcg64Mcg::seed_from_u64(seed);
         match planner
             .clone()
             .plan(&mut motion, &mut world(), request, &budget(400_000), &mut rng)
         {
             Ok(s) => {
-                check_solution(&square(), PASSAGE_RESOLUTION, &mut world(), request, &s);
+                if check {
+                    check_solution(&space, resolution, &mut world(), request, &s);
+                }
                 solved += 1;
                 iterations += s.stats.iterations;
             }
@@ -503,7 +491,15 @@ fn channel_goal_birrt_retraction() {
         retraction,
         ..BiRrt::default()
     };
-    let runs = |birrt: &BiRrt, retracts: bool| sixteen_streams(birrt, || Channel { retracts, checks: 0 }, &request);
+    let runs = |birrt: &BiRrt, retracts: bool| {
+        sixteen_streams(
+            birrt,
+            (square(), PASSAGE_RESOLUTION),
+            || Channel { retracts, checks: 0 },
+            &request,
+            true,
+        )
+    };
     let on = Some(Retraction::default());
     let (retracted, without, no_geometry) = (runs(&with(on), true), runs(&with(None), true), runs(&with(on), false));
     println!(
@@ -606,7 +602,15 @@ fn elbow_goal_rrt_zone_retraction() {
         zone_retraction,
         ..Rrt::default()
     };
-    let runs = |rrt: &Rrt, retracts: bool| sixteen_streams(rrt, || Elbow { retracts, checks: 0 }, &request);
+    let runs = |rrt: &Rrt, retracts: bool| {
+        sixteen_streams(
+            rrt,
+            (square(), PASSAGE_RESOLUTION),
+            || Elbow { retracts, checks: 0 },
+            &request,
+            true,
+        )
+    };
     let every = Some(Retraction {
         every: 1,
         ..Retraction::default()

@@ -368,10 +368,7 @@ fn rrt_for(robot: &str, range: Option<f64>, goal_zone: Option<f64>, retraction: 
         goal_zone_radius,
         zone_retraction: match (retraction, robot) {
             (Some(0), _) | (None, "fetch") => None,
-            (Some(every), _) => Some(Retraction {
-                every,
-                ..planner.zone_retraction.unwrap_or_default()
-            }),
+            (Some(every), _) => planner.zone_retraction.map(|r| Retraction { every, ..r }),
             (None, _) => planner.zone_retraction,
         },
         ..planner
