@@ -1,6 +1,7 @@
 //! The single-configuration check (FK + every link against the obstacles + self-collision),
 //! the hot loop of every planner, on a MotionBenchMaker Panda problem, and for the Fetch's arm
-//! over a table in the simulator, through the live world's view and through its scene copy.
+//! over a table in the simulator, through the live world's view and through its scene copy;
+//! and the contacts retraction asks for, against parry's own query.
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -133,5 +134,81 @@ fn world_validity(c: &mut Criterion) {
     c.bench_function("world/to_scene_fetch_table", |b| b.iter(|| black_box(view.to_scene())));
 }
 
-criterion_group!(benches, state_validity, world_validity);
+/// Contacts of overlapping shapes (`obstacles::shape_contact`, which retraction asks for):
+/// boxes by the separating-axis test, a cylinder against a box by GJK and the per-thread EPA,
+/// each beside parry's `query::contact` on the same 512 seeded pairs.
+fn contacts(c: &mut Criterion) {
+    use hearth_planning::obstacles::shape_contact;
+    use parry3d::math::{Pose, Rotation, Vector};
+    use parry3d::shape::{Cuboid, Cylinder, Shape};
+    use rand::RngExt;
+
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+    let mut pose = |rng: &mut rand_pcg::Pcg64Mcg, reach: f32| {
+        let mut v = || {
+            if reach > 0.0 {
+                rng.random_range(-reach..reach)
+            } else {
+                0.0
+            }
+        };
+        let at = Vector::new(v(), v(), v());
+        let rot = Rotation::from_rotation_x(rng.random_range(-3.2..3.2))
+            * Rotation::from_rotation_y(rng.random_range(-3.2..3.2));
+        Pose::from_parts(at, rot)
+    };
+    let mut pairs = |rng: &mut rand_pcg::Pcg64Mcg, first: &dyn Fn(&mut rand_pcg::Pcg64Mcg) -> Box<dyn Shape>| {
+        let mut out = Vec::new();
+        while out.len() < 512 {
+            let a = first(rng);
+            let h = Vector::new(
+                rng.random_range(0.02..0.2),
+                rng.random_range(0.02..0.2),
+                rng.random_range(0.01..0.05),
+            );
+            let b: Box<dyn Shape> = Box::new(Cuboid::new(h));
+            let (pa, pb) = (pose(rng, 0.0), pose(rng, 0.15));
+            if parry3d::query::intersection_test(&pa, a.as_ref(), &pb, b.as_ref())
+                .unwrap()
+                .intersecting
+            {
+                out.push((a, pa, b, pb));
+            }
+        }
+        out
+    };
+    let boxes = pairs(&mut rng, &|rng| {
+        let h = Vector::new(
+            rng.random_range(0.05..0.15),
+            rng.random_range(0.03..0.08),
+            rng.random_range(0.03..0.13),
+        );
+        Box::new(Cuboid::new(h))
+    });
+    let cylinders = pairs(&mut rng, &|rng| {
+        Box::new(Cylinder::new(
+            rng.random_range(0.05..0.15),
+            rng.random_range(0.03..0.08),
+        ))
+    });
+    for (name, set) in [("box_box", &boxes), ("cylinder_box", &cylinders)] {
+        let mut k = 0;
+        c.bench_function(&format!("contact/{name}_overlapping"), |b| {
+            b.iter(|| {
+                k = (k + 1) & 511;
+                let (a, pa, o, po) = &set[k];
+                black_box(shape_contact(a.as_ref(), pa, o.as_ref(), po, 0.0))
+            })
+        });
+        c.bench_function(&format!("contact/{name}_overlapping_parry"), |b| {
+            b.iter(|| {
+                k = (k + 1) & 511;
+                let (a, pa, o, po) = &set[k];
+                black_box(parry3d::query::contact(pa, a.as_ref(), po, o.as_ref(), 0.0))
+            })
+        });
+    }
+}
+
+criterion_group!(benches, state_validity, world_validity, contacts);
 criterion_main!(benches);
