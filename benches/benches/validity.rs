@@ -144,7 +144,7 @@ fn contacts(c: &mut Criterion) {
     use rand::RngExt;
 
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
-    let mut pose = |rng: &mut rand_pcg::Pcg64Mcg, reach: f32| {
+    let pose = |rng: &mut rand_pcg::Pcg64Mcg, reach: f32| {
         let mut v = || {
             if reach > 0.0 {
                 rng.random_range(-reach..reach)
@@ -157,7 +157,7 @@ fn contacts(c: &mut Criterion) {
             * Rotation::from_rotation_y(rng.random_range(-3.2..3.2));
         Pose::from_parts(at, rot)
     };
-    let mut pairs = |rng: &mut rand_pcg::Pcg64Mcg, first: &dyn Fn(&mut rand_pcg::Pcg64Mcg) -> Box<dyn Shape>| {
+    let pairs = |rng: &mut rand_pcg::Pcg64Mcg, first: &dyn Fn(&mut rand_pcg::Pcg64Mcg) -> Box<dyn Shape>| {
         let mut out = Vec::new();
         while out.len() < 512 {
             let a = first(rng);
