@@ -100,8 +100,8 @@ pub fn shape_contact(
 /// `a`'s point on its supporting feature along the normal nearest `b`'s centre, the unit
 /// normal from `a` towards `b` along which they overlap least, and the signed distance (minus
 /// that overlap): the penetration depth of two convex polyhedra is their least overlap over
-/// these axes, so the depth and normal are the EPA's, found in a few dozen operations
-/// instead of a polytope's expansion. (Retraction asks for such contacts by the thousand a
+/// these axes, so this is the depth and normal that the EPA approximates, found in a few
+/// dozen operations instead of a polytope's expansion. (Retraction asks for such contacts by the thousand a
 /// second among box-shaped links and shelf boards.)
 fn cuboids_overlap(pos12: &Pose, ha: Vector, hb: Vector) -> Option<(Vector, Vector, Real)> {
     type V3 = [f64; 3];
