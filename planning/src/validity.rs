@@ -3,13 +3,14 @@
 use std::sync::Arc;
 
 use hearth_kinematics::{
-    Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, links_touch, to_pose, to_vector,
+    Chain, FkSubset, PairTable, RobotModel, SelfCollisionMatrix, from_pose, to_pose, to_vector,
 };
 use nalgebra::{Isometry3, Point3};
-use parry3d::math::{Real, Vector};
+use parry3d::math::{Pose, Real, Vector};
 use parry3d::shape::{Ball, SharedShape};
 
 use crate::error::PlanError;
+use crate::obstacles::shapes_touch;
 use crate::obstacles::{BallBatch, ObstacleId, Obstacles};
 use crate::pair_lanes::PairLanes;
 use crate::reach::{Reach, Row};
@@ -1731,20 +1732,52 @@ impl RobotValidity {
                 zs.push(d.z as f32);
                 rs.push(bp.parts[kb].1 as f32);
             }
+            // Each part of `a` against the parts of `b` whose balls meet its ball, exactly.
+            let bp = &self.broad;
+            let [xs, ys, zs, rs] = &bp.near_soa;
             close = near_a.iter().any(|&ka| {
                 let d = bp.parts_world[ka] - origin;
                 let (ax, ay, az, ra) = (d.x as f32, d.y as f32, d.z as f32, bp.parts[ka].1 as f32);
-                let mut hit = false;
-                for j in 0..xs.len() {
+                (0..xs.len()).any(|j| {
                     let (dx, dy, dz, r) = (xs[j] - ax, ys[j] - ay, zs[j] - az, rs[j] + ra);
-                    hit |= dx * dx + dy * dy + dz * dz <= r * r;
-                }
-                hit
+                    dx * dx + dy * dy + dz * dz <= r * r && self.parts_touch(a, ka, b, near_b[j])
+                })
             });
         }
+        let bp = &mut self.broad;
         bp.near_a = near_a;
         bp.near_b = near_b;
-        close && links_touch(&self.model, &self.poses, a, b)
+        close
+    }
+
+    /// Part `k` of link `l` at the current poses, as parry takes it. Every exact part test
+    /// composes the part's pose this way.
+    #[inline]
+    fn part_pose(&self, l: usize, k: usize) -> Pose {
+        to_pose(&(self.poses[l] * self.broad.part_shape[k].1))
+    }
+
+    /// Whether part `ka` of link `a` touches part `kb` of link `b` at the current poses
+    /// ([`shapes_touch`]).
+    #[inline]
+    fn parts_touch(&self, a: usize, ka: usize, b: usize, kb: usize) -> bool {
+        let (sa, sb) = (&self.broad.part_shape[ka].0, &self.broad.part_shape[kb].0);
+        shapes_touch(sa.as_ref(), &self.part_pose(a, ka), sb.as_ref(), &self.part_pose(b, kb))
+    }
+
+    /// Whether links `a` and `b` touch at the current poses: every pair of their parts whose
+    /// bounding balls meet, by [`RobotValidity::parts_touch`]. The exact reference of
+    /// the self-collision test ([`RobotValidity::is_valid_exact`], [`RobotValidity::explain`]).
+    fn links_touch(&self, a: usize, b: usize) -> bool {
+        let bp = &self.broad;
+        let world = |l: usize, k: usize| self.poses[l] * bp.parts[k].0;
+        bp.part_range[a].clone().any(|ka| {
+            let ca = world(a, ka);
+            bp.part_range[b].clone().any(|kb| {
+                let r = bp.parts[ka].1 + bp.parts[kb].1;
+                (world(b, kb) - ca).norm_squared() <= r * r && self.parts_touch(a, ka, b, kb)
+            })
+        })
     }
 
     /// Whether one link of the pair `(a, b)` is a single box that no ball of the other link's
@@ -1982,11 +2015,7 @@ impl RobotValidity {
         if self.geometric.iter().any(|&l| self.link_hits(l).is_some()) {
             return false;
         }
-        if self
-            .pairs
-            .iter()
-            .any(|&(a, b)| links_touch(&self.model, &self.poses, a, b))
-        {
+        if self.pairs.iter().any(|&(a, b)| self.links_touch(a, b)) {
             return false;
         }
         !self.attached_blocked()
@@ -2055,7 +2084,7 @@ impl RobotValidity {
                 });
             }
         }
-        if let Some((a, b)) = self.matrix.first_collision(&self.model, &self.poses) {
+        if let Some(&(a, b)) = self.pairs.iter().find(|&&(a, b)| self.links_touch(a, b)) {
             return Some(Contact::SelfCollision {
                 a: names(a),
                 b: names(b),
@@ -2229,7 +2258,7 @@ mod tests {
             v.update_centers();
             for &i in &selected {
                 let (a, b) = v.pairs[i];
-                let touch = links_touch(&v.model, &v.poses, a, b);
+                let touch = hearth_kinematics::links_touch(&v.model, &v.poses, a, b);
                 let clear = proof(&v, i);
                 assert!(!(touch && clear), "{:?} cleared while touching", (a, b));
                 tested += 1;

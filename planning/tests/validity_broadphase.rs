@@ -12,6 +12,7 @@ use hearth_planning::validity::{RobotValidity, StateValidator};
 use nalgebra::Isometry3;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::query;
+use parry3d::shape::SharedShape;
 use rand::{RngExt, SeedableRng};
 
 /// Every geometric link against every obstacle (exact parry test on the link shape), then every
@@ -70,6 +71,34 @@ impl Reference {
             .iter()
             .any(|&(a, b)| links_touch(&self.model, &self.poses, a, b))
     }
+
+    /// Whether parry contradicts itself on a part pair of a checked self-collision pair at
+    /// `q`: its GJK intersection test and its contact query (GJK, then EPA) disagree about
+    /// contact. The checker decides such pairs by its own closed forms and exact search
+    /// (checked against alternating projections in the crate's property tests), so the
+    /// reference cannot judge them. Parry's intersection test has called a cylinder and a
+    /// box touching that its contact query puts 4 mm apart.
+    fn self_unsure(&mut self, q: &[f64]) -> bool {
+        self.pose(q);
+        let parts = |s: &SharedShape| match s.as_compound() {
+            Some(c) => c.shapes().to_vec(),
+            None => vec![(Pose::IDENTITY, s.clone())],
+        };
+        self.pairs.iter().any(|&(a, b)| {
+            let (sa, sb) = (self.model.link_shape(a).unwrap(), self.model.link_shape(b).unwrap());
+            let (pa, pb) = (to_pose(&(self.poses[a] * sa.origin)), to_pose(&(self.poses[b] * sb.origin)));
+            parts(&sa.shape).iter().any(|(qa, xa)| {
+                parts(&sb.shape).iter().any(|(qb, xb)| {
+                    let (wa, wb) = (pa * *qa, pb * *qb);
+                    let touch = query::intersection_test(&wa, xa.as_ref(), &wb, xb.as_ref())
+                        .is_ok_and(|t| t.intersecting);
+                    // A contact at a positive distance, or a depth, that contradicts the test.
+                    query::contact(&wa, xa.as_ref(), &wb, xb.as_ref(), 0.0)
+                        .is_ok_and(|c| c.is_some_and(|c| if touch { c.dist > 1e-4 } else { c.dist < -1e-4 }))
+                })
+            })
+        })
+    }
 }
 
 /// A built-in robot's chain and a self-collision matrix from `samples` random configurations.
@@ -126,7 +155,21 @@ fn cluttered(seed: u64, n: usize) -> Vec<Obstacle> {
 
 /// Runs `qs` through both checkers (twice through the fast one, in two orders, so the
 /// last-failure hint is exercised) and returns (valid, invalid) counts.
+/// Configurations where parry contradicts itself on a self-collision pair
+/// ([`Reference::self_unsure`]) are left out of the comparison and only checked for the same
+/// answer on the checker's three paths.
 fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize, usize) {
+    let all = qs.len();
+    let (unsure, qs): (Vec<Vec<f64>>, Vec<Vec<f64>>) = qs.iter().cloned().partition(|q| r.self_unsure(q));
+    // Parry contradicts itself on 0–4 % of random states, 13 % of the Fetch's pocket runs
+    // (links folded close together).
+    assert!(unsure.len() * 100 <= all * 15, "{} of {all} configurations left out", unsure.len());
+    // Those the checker answers the same way on every path.
+    for (i, q) in unsure.iter().enumerate() {
+        let fast = v.is_valid(q);
+        assert_eq!(v.is_valid_exact(q), fast, "exact path, left-out configuration {i}");
+        assert_eq!(v.explain(q).is_none(), fast, "explain, left-out configuration {i}");
+    }
     let expected: Vec<bool> = qs.iter().map(|q| r.is_valid(q)).collect();
     for (i, q) in qs.iter().enumerate() {
         assert_eq!(v.is_valid(q), expected[i], "configuration {i}: {q:?}");

@@ -328,7 +328,7 @@ fn tetrahedron(s: &mut [V; 4], n: &mut usize, d: &mut V) -> Step {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::{Convex, V, touch};
     use nalgebra::{Rotation3, Unit};
     use parry3d::math::Vector;
@@ -364,7 +364,7 @@ mod tests {
     }
 
     /// How deep parry finds the two shapes overlapping (its EPA in f32), 0 when apart.
-    fn parry_depth(a: &Convex, b: &Convex) -> f32 {
+    pub(in crate::obstacles) fn parry_depth(a: &Convex, b: &Convex) -> f32 {
         let ((sa, pa), (sb, pb)) = (parry_shape(a), parry_shape(b));
         parry3d::query::contact(&pa, sa.as_ref(), &pb, sb.as_ref(), 0.0)
             .unwrap()
@@ -382,7 +382,7 @@ mod tests {
 
     /// The point of `s` nearest `x`, in closed form: clamped in the box's frame, or clamped
     /// along the cylinder's axis and then radially.
-    fn project(s: &Convex, x: V) -> V {
+    pub(in crate::obstacles) fn project(s: &Convex, x: V) -> V {
         match *s {
             Convex::Cuboid { center, axes, half } => {
                 let r = x - center;
@@ -410,7 +410,7 @@ mod tests {
     /// the plane across the last pair's direction (a lower bound, negative when it fails to
     /// separate them). On 20,000 random pairs they left 8 undecided: neither apart nor within
     /// 50 nm of a common point.
-    fn distance_bounds(a: &Convex, b: &Convex) -> (f64, f64) {
+    pub(in crate::obstacles) fn distance_bounds(a: &Convex, b: &Convex) -> (f64, f64) {
         let mut pa = project(a, a.center());
         let mut pb = project(b, pa);
         for _ in 0..20_000 {
@@ -432,7 +432,7 @@ mod tests {
     }
 
     /// The parry shape and pose of `s`.
-    fn parry_shape(s: &Convex) -> (Box<dyn parry3d::shape::Shape>, parry3d::math::Pose) {
+    pub(in crate::obstacles) fn parry_shape(s: &Convex) -> (Box<dyn parry3d::shape::Shape>, parry3d::math::Pose) {
         use parry3d::math::{Pose, Rotation, Vector};
         use parry3d::shape::{Cuboid, Cylinder};
         let pose = |c: V, ax: [V; 3]| {
@@ -484,7 +484,7 @@ mod tests {
     /// A shape of a recorded case, in the property test's terms: a box (`true`) or a
     /// cylinder, its centre, the axis and angle of its rotation, and the three dimensions
     /// [`shape`] takes.
-    fn case(kind: bool, c: [f64; 3], axis: [f64; 3], angle: f64, d: [f64; 3]) -> Convex {
+    pub(in crate::obstacles) fn case(kind: bool, c: [f64; 3], axis: [f64; 3], angle: f64, d: [f64; 3]) -> Convex {
         shape(kind, V::from(c), rotation(axis, angle), d[0], d[1], d[2])
     }
 

@@ -43,6 +43,7 @@ use crate::error::Num;
 pub use balls::BallBatch;
 pub use contact::shape_contact;
 pub use scene::ParryScene;
+pub(crate) use scene::shapes_touch;
 
 /// The nearest leaf of `bvh` to the box `query` within `max_dist`, for implementations of
 /// [`Obstacles::distance`] over a parry [`Bvh`](parry3d::partitioning::Bvh): subtrees whose

@@ -266,10 +266,7 @@ impl ParryScene {
                 Err(_) => true,
             };
         }
-        match query::intersection_test(pose, shape, &o.pose, &*o.shape) {
-            Ok(hit) => hit.intersecting,
-            Err(_) => query::distance(pose, shape, &o.pose, &*o.shape).map_or(true, |d| d.distance <= 0.0),
-        }
+        parry_touch(shape, pose, &*o.shape, &o.pose)
     }
 }
 
@@ -424,6 +421,58 @@ impl SoaBoxes {
             },
             exact,
         )
+    }
+}
+
+/// Parry's exact test of two shapes without a margin; a pair parry cannot test counts as
+/// touching when its distance query finds no gap (or cannot measure it either).
+fn parry_touch(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
+    match query::intersection_test(pa, a, pb, b) {
+        Ok(hit) => hit.intersecting,
+        Err(_) => query::distance(pa, a, pb, b).map_or(true, |d| d.distance <= 0.0),
+    }
+}
+
+/// Whether two shapes at their world poses share a point, by the tests
+/// [`ParryScene::first_hit`] gives a robot part against an obstacle: a ball in closed form
+/// against a box, a ball, a cylinder or a capsule; two boxes by the separating-axis test; a
+/// cylinder against a box by that test on the box around the cylinder, then the closed-form
+/// certificates of [`cylinder_meets_box`], then the exact search of [`gjk::touch`]; two
+/// cylinders by the box test, then the search; parry where none of these settles it, and for
+/// every other pair. Self-collision takes it for a pair of robot parts whose bounding balls
+/// meet, in place of parry's test of one link's compound shape against the other's.
+pub(crate) fn shapes_touch(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
+    let parry = || parry_touch(a, pa, b, pb);
+    if let Some(ball) = a.as_ball() {
+        return Quick::at(b, pb).ball(pa.translation, ball.radius).unwrap_or_else(parry);
+    }
+    if let Some(ball) = b.as_ball() {
+        return Quick::at(a, pa).ball(pb.translation, ball.radius).unwrap_or_else(parry);
+    }
+    // A box is its own box; a cylinder (axis local y) first the box around it.
+    let boxed = |s: &dyn Shape, pose: &Pose| {
+        if let Some(c) = s.as_cuboid() {
+            Some((Obb::at(pose, c.half_extents), true))
+        } else {
+            s.as_cylinder()
+                .map(|c| (Obb::at(pose, Vector::new(c.radius, c.half_height, c.radius)), false))
+        }
+    };
+    let (Some((oa, box_a)), Some((ob, box_b))) = (boxed(a, pa), boxed(b, pb)) else {
+        return parry();
+    };
+    if !oa.touches(&ob) {
+        return false;
+    }
+    match (box_a, box_b) {
+        (true, true) => true,
+        (false, true) => cylinder_meets_box(&oa, &ob)
+            .or_else(|| gjk::touch(&oa.cylinder_convex(), &ob.convex()))
+            .unwrap_or_else(parry),
+        (true, false) => cylinder_meets_box(&ob, &oa)
+            .or_else(|| gjk::touch(&ob.cylinder_convex(), &oa.convex()))
+            .unwrap_or_else(parry),
+        (false, false) => gjk::touch(&oa.cylinder_convex(), &ob.cylinder_convex()).unwrap_or_else(parry),
     }
 }
 
@@ -748,25 +797,29 @@ fn load8(v: &[Real; BallBatch::CAPACITY], o: usize) -> f32x8 {
 
 impl Quick {
     fn of(o: &Obstacle) -> Self {
-        let s = &*o.shape;
+        Self::at(&*o.shape, &o.pose)
+    }
+
+    /// `s` at `pose` in the world.
+    fn at(s: &dyn Shape, pose: &Pose) -> Self {
         if let Some(c) = s.as_cuboid() {
-            Quick::Cuboid(Obb::at(&o.pose, c.half_extents))
+            Quick::Cuboid(Obb::at(pose, c.half_extents))
         } else if let Some(b) = s.as_ball() {
             Quick::Ball {
-                center: o.pose.translation,
+                center: pose.translation,
                 radius: b.radius,
             }
         } else if let Some(c) = s.as_cylinder() {
             Quick::Cylinder {
-                center: o.pose.translation,
-                axis: o.pose.transform_vector(Vector::Y),
+                center: pose.translation,
+                axis: pose.transform_vector(Vector::Y),
                 half_height: c.half_height,
                 radius: c.radius,
             }
         } else if let Some(c) = s.as_capsule() {
             Quick::Capsule {
-                a: o.pose.transform_point(c.segment.a),
-                b: o.pose.transform_point(c.segment.b),
+                a: pose.transform_point(c.segment.a),
+                b: pose.transform_point(c.segment.b),
                 radius: c.radius,
             }
         } else {
@@ -1076,5 +1129,121 @@ impl Obstacles for ParryScene {
 
     fn name(&self, id: ObstacleId) -> Option<&str> {
         self.get(id).map(|o| o.name.as_str())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::gjk::Convex;
+    use super::super::gjk::tests::{case, distance_bounds, parry_depth, parry_shape, project};
+    use super::shapes_touch;
+    use nalgebra::Vector3;
+    use parry3d::math::{Pose, Vector};
+    use parry3d::shape::{Ball, Shape};
+    use proptest::prelude::*;
+
+    /// A robot part of the property test: a box or a cylinder, or a ball (centre, radius).
+    enum Part {
+        Convex(Convex),
+        Ball(Vector3<f64>, f64),
+    }
+
+    /// Kind 0 a box, 1 a cylinder, 2 a ball of radius `d[0]`, in the terms of [`case`].
+    fn part(kind: u8, c: [f64; 3], axis: [f64; 3], angle: f64, d: [f64; 3]) -> Part {
+        if kind == 2 {
+            // As the parry ball is built: f32 centre and radius.
+            let c = Vector3::from(c.map(|x| f64::from(x as f32)));
+            Part::Ball(c, f64::from(d[0] as f32))
+        } else {
+            Part::Convex(case(kind == 0, c, axis, angle, d))
+        }
+    }
+
+    fn parry_of(p: &Part) -> (Box<dyn Shape>, Pose) {
+        match p {
+            Part::Convex(c) => parry_shape(c),
+            Part::Ball(c, r) => (
+                Box::new(Ball::new(*r as f32)),
+                Pose::from_translation(Vector::new(c.x as f32, c.y as f32, c.z as f32)),
+            ),
+        }
+    }
+
+    /// (certainly apart, certainly overlapping): apart by more than 0.1 mm, or overlapping
+    /// by more than 0.1 mm (a ball) or a millimetre by parry's depth (two convex parts, whose
+    /// reference bounds only say "within 50 nm of a common point").
+    fn reference(a: &Part, b: &Part) -> (bool, bool) {
+        let ball_gap = |c: &Vector3<f64>, r: f64, other: &Part| match other {
+            Part::Convex(s) => (project(s, *c) - c).norm() - r,
+            Part::Ball(c2, r2) => (c2 - c).norm() - r - r2,
+        };
+        let gap = match (a, b) {
+            (Part::Ball(c, r), other) | (other, Part::Ball(c, r)) => ball_gap(c, *r, other),
+            (Part::Convex(x), Part::Convex(y)) => {
+                let (lower, upper) = distance_bounds(x, y);
+                if lower > 1e-4 {
+                    return (true, false);
+                }
+                return (false, upper < 5e-8 && parry_depth(x, y) > 1e-3);
+            }
+        };
+        // A ball whose centre lies inside the other part is at least its radius deep.
+        (gap > 1e-4, gap < -1e-4)
+    }
+
+    fn touch_both(a: &Part, b: &Part) -> (bool, bool) {
+        let ((sa, pa), (sb, pb)) = (parry_of(a), parry_of(b));
+        (
+            shapes_touch(sa.as_ref(), &pa, sb.as_ref(), &pb),
+            shapes_touch(sb.as_ref(), &pb, sa.as_ref(), &pa),
+        )
+    }
+
+    #[test]
+    fn plain_pairs() {
+        let id = [0.0; 3];
+        let cases = [
+            // Two boxes 5 cm apart along x, then overlapping by 5 cm.
+            (part(0, [0.0; 3], id, 0.0, [0.1; 3]), part(0, [0.25, 0.0, 0.0], id, 0.0, [0.1; 3]), false),
+            (part(0, [0.0; 3], id, 0.0, [0.1; 3]), part(0, [0.15, 0.0, 0.0], id, 0.0, [0.1; 3]), true),
+            // A cylinder (axis y) standing 1 cm off a box's face, then through it.
+            (part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), part(0, [0.16, 0.0, 0.0], id, 0.0, [0.1; 3]), false),
+            (part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), part(0, [0.14, 0.0, 0.0], id, 0.0, [0.1; 3]), true),
+            // A ball near a cylinder's rim, outside and inside.
+            (part(2, [0.0, 0.22, 0.0], id, 0.0, [0.01; 3]), part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), false),
+            (part(2, [0.0, 0.205, 0.0], id, 0.0, [0.01; 3]), part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), true),
+            // Two crossed cylinders 1 mm apart, then 3 mm into each other.
+            (part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), part(1, [0.101, 0.0, 0.0], [1.0, 0.0, 0.0], 1.5707963, [0.2, 0.05, 0.0]), false),
+            (part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]), part(1, [0.097, 0.0, 0.0], [1.0, 0.0, 0.0], 1.5707963, [0.2, 0.05, 0.0]), true),
+        ];
+        for (i, (a, b, touching)) in cases.iter().enumerate() {
+            assert_eq!(reference(a, b), (!touching, *touching), "reference of case {i}");
+            assert_eq!(touch_both(a, b), (*touching, *touching), "case {i}");
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+
+        /// Never a contact between parts surely 0.1 mm apart, always one between parts
+        /// surely overlapping, for every pair of a box, a cylinder and a ball, both ways round.
+        #[test]
+        fn agrees_with_the_reference(
+            ka in 0u8..3, kb in 0u8..3,
+            ca in prop::array::uniform3(-0.3..0.3f64), cb in prop::array::uniform3(-0.3..0.3f64),
+            ra in prop::array::uniform3(-1.0..1.0f64), rb in prop::array::uniform3(-1.0..1.0f64),
+            aa in -3.2..3.2f64, ab in -3.2..3.2f64,
+            da in prop::array::uniform3(0.005..0.25f64), db in prop::array::uniform3(0.005..0.25f64),
+        ) {
+            let (a, b) = (part(ka, ca, ra, aa, da), part(kb, cb, rb, ab, db));
+            let (apart, overlapping) = reference(&a, &b);
+            let (ab_touch, ba_touch) = touch_both(&a, &b);
+            if apart {
+                prop_assert!(!ab_touch && !ba_touch, "apart, yet touching ({}, {})", ab_touch, ba_touch);
+            }
+            if overlapping {
+                prop_assert!(ab_touch && ba_touch, "overlapping, yet apart ({}, {})", ab_touch, ba_touch);
+            }
+        }
     }
 }
