@@ -86,12 +86,15 @@ impl Reference {
         };
         self.pairs.iter().any(|&(a, b)| {
             let (sa, sb) = (self.model.link_shape(a).unwrap(), self.model.link_shape(b).unwrap());
-            let (pa, pb) = (to_pose(&(self.poses[a] * sa.origin)), to_pose(&(self.poses[b] * sb.origin)));
+            let (pa, pb) = (
+                to_pose(&(self.poses[a] * sa.origin)),
+                to_pose(&(self.poses[b] * sb.origin)),
+            );
             parts(&sa.shape).iter().any(|(qa, xa)| {
                 parts(&sb.shape).iter().any(|(qb, xb)| {
                     let (wa, wb) = (pa * *qa, pb * *qb);
-                    let touch = query::intersection_test(&wa, xa.as_ref(), &wb, xb.as_ref())
-                        .is_ok_and(|t| t.intersecting);
+                    let touch =
+                        query::intersection_test(&wa, xa.as_ref(), &wb, xb.as_ref()).is_ok_and(|t| t.intersecting);
                     // A contact at a positive distance, or a depth, that contradicts the test.
                     query::contact(&wa, xa.as_ref(), &wb, xb.as_ref(), 0.0)
                         .is_ok_and(|c| c.is_some_and(|c| if touch { c.dist > 1e-4 } else { c.dist < -1e-4 }))
@@ -163,7 +166,11 @@ fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize,
     let (unsure, qs): (Vec<Vec<f64>>, Vec<Vec<f64>>) = qs.iter().cloned().partition(|q| r.self_unsure(q));
     // Parry contradicts itself on 0–4 % of random states, 13 % of the Fetch's pocket runs
     // (links folded close together).
-    assert!(unsure.len() * 100 <= all * 15, "{} of {all} configurations left out", unsure.len());
+    assert!(
+        unsure.len() * 100 <= all * 15,
+        "{} of {all} configurations left out",
+        unsure.len()
+    );
     // Those the checker answers the same way on every path.
     for (i, q) in unsure.iter().enumerate() {
         let fast = v.is_valid(q);
