@@ -1543,18 +1543,18 @@ impl RobotValidity {
     /// balls was asked first ([`RobotValidity::touched_parts_hit`]).
     #[inline]
     fn part_hits(&self, l: usize, k: usize) -> Option<ObstacleId> {
-        let (shape, at) = &self.broad.part_shape[k];
+        let shape = &self.broad.part_shape[k].0;
         let (c, r) = self.broad.part_inner[k];
         if r > 0.0 {
             let w = self.poses[l] * c;
-            let at_w = parry3d::math::Pose::from_translation(to_vector(&w));
+            let at_w = Pose::from_translation(to_vector(&w));
             if let Some(id) = self.obstacles.first_hit(&Ball::new(r as f32), &at_w) {
                 return Some(id);
             }
         }
         let hit = self
             .obstacles
-            .first_hit(shape.as_ref(), &to_pose(&(self.poses[l] * at)))?;
+            .first_hit(shape.as_ref(), &self.part_pose(l, k))?;
         let (c, r) = self.broad.parts[k];
         let c = self.poses[l] * c;
         self.obstacles.ball_hits(to_vector(&c), r as f32).then_some(hit)
