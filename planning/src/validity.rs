@@ -1552,9 +1552,7 @@ impl RobotValidity {
                 return Some(id);
             }
         }
-        let hit = self
-            .obstacles
-            .first_hit(shape.as_ref(), &self.part_pose(l, k))?;
+        let hit = self.obstacles.first_hit(shape.as_ref(), &self.part_pose(l, k))?;
         let (c, r) = self.broad.parts[k];
         let c = self.poses[l] * c;
         self.obstacles.ball_hits(to_vector(&c), r as f32).then_some(hit)
