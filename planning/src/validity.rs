@@ -1743,7 +1743,7 @@ impl RobotValidity {
         }
         bp.near_a = near_a;
         bp.near_b = near_b;
-        close && self.links_touch(a, b)
+        close && self.pair_touches(a, b)
     }
 
     /// Part `k` of link `l` at the current poses, as parry takes it. Every exact part test
@@ -1764,15 +1764,16 @@ impl RobotValidity {
     /// Whether links `a` and `b` touch at the current poses: the exact test of every
     /// self-collision check, [`RobotValidity::is_valid_exact`] and [`RobotValidity::explain`].
     ///
-    /// Parry's test of one link's compound shape against the other's comes first: its box
-    /// trees prune the part pairs well, and where it finds the links apart they are (the exact
-    /// search never found contact where parry's test did not). Its "touching" is confirmed part
-    /// pair by part pair ([`RobotValidity::parts_touch`], on the pairs whose bounding balls
-    /// meet): parry 0.31's GJK answers "intersecting" when it stalls, and so refused every
-    /// goal of the Fetch's table_pick 87 for a head box and an upper-arm cylinder that the
-    /// exact search separates by a plane (a fine sampling puts them within 0.25 mm). Testing every pair part by part alone took 2–11 % more
-    /// instructions per check (thirty-fourth round); the confirmation runs only on contact.
-    fn links_touch(&self, a: usize, b: usize) -> bool {
+    /// Parry's test of one link's compound shape against the other's ([`links_touch`]) comes
+    /// first: its box trees prune the part pairs well, and where it finds the links apart they
+    /// are (the exact search never found contact where parry's test did not). Its "touching"
+    /// is confirmed part pair by part pair ([`RobotValidity::parts_touch`], on the pairs whose
+    /// bounding balls meet): parry 0.31's GJK answers "intersecting" when it stalls, and so
+    /// refused every goal of the Fetch's table_pick 87 for a head box and an upper-arm
+    /// cylinder that the exact search separates by a plane (a fine sampling puts them within
+    /// 0.25 mm). Testing every pair part by part alone took 2–11 % more instructions per
+    /// check (thirty-fourth round); the confirmation runs only on contact.
+    fn pair_touches(&self, a: usize, b: usize) -> bool {
         if !links_touch(&self.model, &self.poses, a, b) {
             return false;
         }
@@ -2022,7 +2023,7 @@ impl RobotValidity {
         if self.geometric.iter().any(|&l| self.link_hits(l).is_some()) {
             return false;
         }
-        if self.pairs.iter().any(|&(a, b)| self.links_touch(a, b)) {
+        if self.pairs.iter().any(|&(a, b)| self.pair_touches(a, b)) {
             return false;
         }
         !self.attached_blocked()
@@ -2091,7 +2092,7 @@ impl RobotValidity {
                 });
             }
         }
-        if let Some(&(a, b)) = self.pairs.iter().find(|&&(a, b)| self.links_touch(a, b)) {
+        if let Some(&(a, b)) = self.pairs.iter().find(|&&(a, b)| self.pair_touches(a, b)) {
             return Some(Contact::SelfCollision {
                 a: names(a),
                 b: names(b),

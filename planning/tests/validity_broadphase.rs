@@ -158,6 +158,7 @@ fn cluttered(seed: u64, n: usize) -> Vec<Obstacle> {
 
 /// Runs `qs` through both checkers (twice through the fast one, in two orders, so the
 /// last-failure hint is exercised) and returns (valid, invalid) counts.
+///
 /// Configurations where parry contradicts itself on a self-collision pair
 /// ([`Reference::self_unsure`]) are left out of the comparison and only checked for the same
 /// answer on the checker's three paths.

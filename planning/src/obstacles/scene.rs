@@ -439,8 +439,9 @@ fn parry_touch(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
 /// cylinder against a box by that test on the box around the cylinder, then the closed-form
 /// certificates of [`cylinder_meets_box`], then the exact search of [`gjk::touch`]; two
 /// cylinders by the box test, then the search; parry where none of these settles it, and for
-/// every other pair. Self-collision takes it for a pair of robot parts whose bounding balls
-/// meet, in place of parry's test of one link's compound shape against the other's.
+/// every other pair. Self-collision asks it of the part pairs whose bounding balls meet when
+/// parry's test of one link's compound shape against the other's reports contact, which
+/// parry's GJK does for some shapes that are apart.
 pub(crate) fn shapes_touch(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
     let parry = || parry_touch(a, pa, b, pb);
     if let Some(ball) = a.as_ball() {
@@ -1202,63 +1203,32 @@ mod tests {
     #[test]
     fn plain_pairs() {
         let id = [0.0; 3];
+        let boxed = |x: f64| part(0, [x, 0.0, 0.0], id, 0.0, [0.1; 3]);
+        // A cylinder along y at the origin, and one along z centred at `x`.
+        let upright = || part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]);
+        let crossed = |x: f64| {
+            part(
+                1,
+                [x, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                std::f64::consts::FRAC_PI_2,
+                [0.2, 0.05, 0.0],
+            )
+        };
+        let ball = |y: f64| part(2, [0.0, y, 0.0], id, 0.0, [0.01; 3]);
         let cases = [
             // Two boxes 5 cm apart along x, then overlapping by 5 cm.
-            (
-                part(0, [0.0; 3], id, 0.0, [0.1; 3]),
-                part(0, [0.25, 0.0, 0.0], id, 0.0, [0.1; 3]),
-                false,
-            ),
-            (
-                part(0, [0.0; 3], id, 0.0, [0.1; 3]),
-                part(0, [0.15, 0.0, 0.0], id, 0.0, [0.1; 3]),
-                true,
-            ),
-            // A cylinder (axis y) standing 1 cm off a box's face, then through it.
-            (
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                part(0, [0.16, 0.0, 0.0], id, 0.0, [0.1; 3]),
-                false,
-            ),
-            (
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                part(0, [0.14, 0.0, 0.0], id, 0.0, [0.1; 3]),
-                true,
-            ),
+            (boxed(0.0), boxed(0.25), false),
+            (boxed(0.0), boxed(0.15), true),
+            // A cylinder standing 1 cm off a box's face, then through it.
+            (upright(), boxed(0.16), false),
+            (upright(), boxed(0.14), true),
             // A ball near a cylinder's rim, outside and inside.
-            (
-                part(2, [0.0, 0.22, 0.0], id, 0.0, [0.01; 3]),
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                false,
-            ),
-            (
-                part(2, [0.0, 0.205, 0.0], id, 0.0, [0.01; 3]),
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                true,
-            ),
+            (ball(0.22), upright(), false),
+            (ball(0.205), upright(), true),
             // Two crossed cylinders 1 mm apart, then 3 mm into each other.
-            (
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                part(
-                    1,
-                    [0.101, 0.0, 0.0],
-                    [1.0, 0.0, 0.0],
-                    std::f64::consts::FRAC_PI_2,
-                    [0.2, 0.05, 0.0],
-                ),
-                false,
-            ),
-            (
-                part(1, [0.0; 3], id, 0.0, [0.2, 0.05, 0.0]),
-                part(
-                    1,
-                    [0.097, 0.0, 0.0],
-                    [1.0, 0.0, 0.0],
-                    std::f64::consts::FRAC_PI_2,
-                    [0.2, 0.05, 0.0],
-                ),
-                true,
-            ),
+            (upright(), crossed(0.101), false),
+            (upright(), crossed(0.097), true),
         ];
         for (i, (a, b, touching)) in cases.iter().enumerate() {
             assert_eq!(reference(a, b), (!touching, *touching), "reference of case {i}");
