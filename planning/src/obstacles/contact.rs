@@ -1,8 +1,12 @@
 //! Contacts between shapes for [`Obstacles::contact`], without allocation for convex pairs and
-//! composite obstacles: the separating-axis test for overlapping boxes; for other shapes
-//! parry's GJK, then its EPA for overlapping shapes, with the EPA's buffers kept per thread.
+//! composite obstacles: the separating-axis test for overlapping boxes; for a cylinder and a
+//! box the exact `f64` search, then their least overlap in closed form (`cylinder_box`); for
+//! other shapes parry's GJK, then its EPA for overlapping shapes, with its buffers kept per
+//! thread.
 
 use std::cell::RefCell;
+
+use nalgebra::Vector3;
 
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::math::{Pose, Real, Vector};
@@ -14,14 +18,19 @@ use parry3d::shape::{Shape, SupportMap};
 use super::ObstacleContact;
 #[cfg(doc)]
 use super::Obstacles;
+use super::cylinder_box::{box_support, cylinder_box_depth, cylinder_support};
+use super::gjk::touch;
+use super::scene::convex_at;
 
 /// Where `shape` at `pose` touches `other` at `other_pose`, counting a gap of up to `margin`
 /// as contact ([`ObstacleContact`], its distance less the margin), or `None`: the answer of
 /// every [`Obstacles::contact`] in the workspace (`ParryScene` and the live world's view).
 /// Balls take parry's closed forms; two overlapping boxes the separating-axis test (their
 /// least overlap over fifteen axes: the exact depth, where parry's EPA can fall a fifth
-/// short on deep overlaps); other convex pairs GJK and the per-thread EPA, which parry's own
-/// `query::contact` would build anew for each overlap; a composite obstacle (a
+/// short on deep overlaps); a cylinder and a box the exact search in `f64`, then where they
+/// overlap their least overlap (exact where the EPA falls short, in half its time); other
+/// convex pairs GJK and the per-thread EPA, which parry's own `query::contact` would build
+/// anew for each overlap; a composite obstacle (a
 /// triangle mesh, a polyline, a compound) the deepest contact of its parts near the shape,
 /// found by its own bounding-volume tree; the rest (height fields, composite robot parts)
 /// parry's `query::contact`.
@@ -60,7 +69,11 @@ pub fn shape_contact(
         && shape.as_ball().is_none()
         && other.as_ball().is_none()
     {
-        let (p, n, d) = support_map_contact(&pose.inv_mul(other_pose), a, b, margin)?;
+        let pos12 = pose.inv_mul(other_pose);
+        let (p, n, d) = match cylinder_box_contact(shape, other, &pos12, margin) {
+            Some(settled) => settled?,
+            None => support_map_contact(&pos12, a, b, margin)?,
+        };
         return Some(ObstacleContact {
             point: *pose * p,
             normal: pose.rotation * n,
@@ -164,6 +177,8 @@ fn cuboids_overlap(pos12: &Pose, ha: Vector, hb: Vector) -> Option<(Vector, Vect
     Some((f(p), f(n), -depth as Real))
 }
 
+type V = Vector3<f64>;
+
 thread_local! {
     /// The EPA's polytope buffers, reused by every contact this thread asks for (parry's
     /// `query::contact` builds a new one per overlapping pair).
@@ -189,6 +204,63 @@ fn support_map_contact(
         GJKResult::NoIntersection(_) | GJKResult::Proximity(_) => return None,
     };
     Some((p1, n, (p2 - p1).dot(n)))
+}
+
+/// The contact of a cylinder and a box, either way round, in [`support_map_contact`]'s terms
+/// (`b` at `pos12` in `a`'s frame), where it is settled without parry: `Some(None)` when the
+/// exact search ([`gjk::touch`](super::gjk::touch), in `f64`) finds them apart and no margin
+/// is asked for; for overlapping shapes their least overlap ([`overlap_of_cylinder_and_box`]).
+/// `None` (parry's GJK and EPA decide) for other pairs, shapes apart within a margin, and
+/// where the search is unsure.
+fn cylinder_box_contact(
+    a: &dyn Shape,
+    b: &dyn Shape,
+    pos12: &Pose,
+    prediction: Real,
+) -> Option<Option<(Vector, Vector, Real)>> {
+    let pair = (a.as_cylinder().is_some() && b.as_cuboid().is_some())
+        || (a.as_cuboid().is_some() && b.as_cylinder().is_some());
+    if !pair {
+        return None;
+    }
+    match touch(&convex_at(a, &Pose::IDENTITY)?, &convex_at(b, pos12)?) {
+        Some(true) => overlap_of_cylinder_and_box(a, b, pos12).map(Some),
+        Some(false) if prediction <= 0.0 => Some(None),
+        _ => None,
+    }
+}
+
+/// The contact of an overlapping cylinder and box, either way round, in [`support_map_contact`]'s
+/// terms: the least overlap ([`cylinder_box_depth`], exact up to a refinement's micrometres,
+/// where parry's EPA can fall short), the normal along which it is least and `a`'s farthest
+/// point along that normal. `None` for other pairs, and where a direction separates the two.
+fn overlap_of_cylinder_and_box(a: &dyn Shape, b: &dyn Shape, pos12: &Pose) -> Option<(Vector, Vector, Real)> {
+    let d3 = |v: Vector| V::new(f64::from(v.x), f64::from(v.y), f64::from(v.z));
+    let f3 = |v: V| Vector::new(v.x as Real, v.y as Real, v.z as Real);
+    // The box's centre and axes in the cylinder's frame.
+    let placed = |p: &Pose| {
+        (
+            d3(p.translation),
+            [Vector::X, Vector::Y, Vector::Z].map(|e| d3(p.rotation * e)),
+        )
+    };
+    if let (Some(c), Some(cuboid)) = (a.as_cylinder(), b.as_cuboid()) {
+        let (t, axes) = placed(pos12);
+        let half = d3(cuboid.half_extents).into();
+        let (depth, n) = cylinder_box_depth(f64::from(c.radius), f64::from(c.half_height), t, axes, half)?;
+        let p = cylinder_support(f64::from(c.radius), f64::from(c.half_height), &n, &t, &axes, &half);
+        return Some((f3(p), f3(n), -depth as Real));
+    }
+    if let (Some(cuboid), Some(c)) = (a.as_cuboid(), b.as_cylinder()) {
+        let (t, axes) = placed(&pos12.inverse());
+        let half: [f64; 3] = d3(cuboid.half_extents).into();
+        let (depth, n) = cylinder_box_depth(f64::from(c.radius), f64::from(c.half_height), t, axes, half)?;
+        // From the box towards the cylinder, in the box's frame.
+        let toward = -V::new(axes[0].dot(&n), axes[1].dot(&n), axes[2].dot(&n));
+        let p = box_support(half, &toward, &d3(pos12.translation));
+        return Some((f3(p), f3(toward), -depth as Real));
+    }
+    None
 }
 
 #[cfg(test)]
@@ -354,6 +426,83 @@ mod tests {
         assert!((c.point - Vector::new(0.05, 0.0, 0.05)).length() < 1e-6, "{c:?}");
     }
 
+    /// A cylinder and a box overlapping, either way round, take the least overlap: the depth
+    /// at least parry's EPA's (which measures a polytope inside the shapes' difference; to
+    /// 0.05 mm, its `f32` tolerance), the first shape moved back along the normal by the
+    /// depth and a tenth of a millimetre clear of the other, and by the depth less a
+    /// millimetre not; the point the first shape's farthest along the normal. Apart, no
+    /// contact without a margin and the gap within one.
+    #[test]
+    fn cylinder_box_contacts_either_way() {
+        use super::super::gjk::{Convex, touch};
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(7);
+        let mut u = |lo: f32, hi: f32| rand::RngExt::random_range(&mut rng, lo..hi);
+        let mut checked = 0;
+        while checked < 300 {
+            let cylinder = Cylinder::new(u(0.02, 0.3), u(0.02, 0.15));
+            let cuboid = Cuboid::new(Vector::new(u(0.01, 0.3), u(0.01, 0.3), u(0.01, 0.3)));
+            let mut pose = |reach: f32| {
+                let rot = Rotation::from_rotation_x(u(-3.2, 3.2)) * Rotation::from_rotation_y(u(-3.2, 3.2));
+                Pose::from_parts(Vector::new(u(-reach, reach), u(-reach, reach), u(-reach, reach)), rot)
+            };
+            let (pc, pb) = (pose(0.05), pose(0.3));
+            let convex = |p: &Pose, moved: Vector, cyl: bool| {
+                let c = p.translation + moved;
+                if cyl {
+                    Convex::cylinder(c, p.rotation * Vector::Y, cylinder.half_height, cylinder.radius)
+                } else {
+                    Convex::cuboid(
+                        c,
+                        [Vector::X, Vector::Y, Vector::Z].map(|e| p.rotation * e),
+                        cuboid.half_extents,
+                    )
+                }
+            };
+            if touch(&convex(&pc, Vector::ZERO, true), &convex(&pb, Vector::ZERO, false)) != Some(true) {
+                continue;
+            }
+            for cylinder_first in [true, false] {
+                let (a, pa, b, pother): (&dyn Shape, _, &dyn Shape, _) = if cylinder_first {
+                    (&cylinder, pc, &cuboid, pb)
+                } else {
+                    (&cuboid, pb, &cylinder, pc)
+                };
+                let c = shape_contact(a, &pa, b, &pother, 0.0).expect("overlapping");
+                let depth = -c.distance;
+                let parry = query::contact(&pa, a, &pother, b, 0.0).unwrap().unwrap();
+                assert!(depth >= -parry.dist - 5e-5, "{c:?} against parry's {parry:?}");
+                let moved = |by: f32| {
+                    touch(
+                        &convex(&pa, -c.normal * by, cylinder_first),
+                        &convex(&pother, Vector::ZERO, !cylinder_first),
+                    )
+                };
+                assert_ne!(moved(depth + 1e-4), Some(true), "{c:?}: still overlapping");
+                if depth > 2e-3 {
+                    assert_ne!(moved(depth - 1e-3), Some(false), "{c:?}: clear before the depth");
+                }
+                let local = pa.rotation.inverse() * c.normal;
+                let farthest = pa.rotation.inverse() * (c.point - pa.translation);
+                let support = a.as_support_map().unwrap().local_support_point(local);
+                assert!(
+                    (farthest - support).dot(local).abs() < 1e-5,
+                    "{c:?}: not the farthest point"
+                );
+            }
+            checked += 1;
+        }
+        // Apart: no contact without a margin, parry's gap within one.
+        let (cylinder, cuboid) = (Cylinder::new(0.1, 0.05), Cuboid::new(Vector::splat(0.1)));
+        let (pc, pb) = (Pose::IDENTITY, Pose::translation(0.18, 0.0, 0.0));
+        assert!(shape_contact(&cylinder, &pc, &cuboid, &pb, 0.0).is_none());
+        assert!(shape_contact(&cuboid, &pb, &cylinder, &pc, 0.0).is_none());
+        let c = shape_contact(&cylinder, &pc, &cuboid, &pb, 0.05).unwrap();
+        assert!(
+            (c.distance - (0.03 - 0.05)).abs() < 1e-6 && (c.normal - Vector::X).length() < 1e-5,
+            "{c:?}"
+        );
+    }
+
     /// Composite obstacles (a triangle mesh, a compound) answer as parry's own composite
     /// query does: the deepest contact among their parts, or none.
     #[test]
@@ -383,7 +532,9 @@ mod tests {
                         answered += 1;
                         assert!((w.dist - 0.02 - c.distance).abs() < 1e-5, "{w:?} against {c:?}");
                         assert!((w.normal1 - c.normal).length() < 1e-4, "{w:?} against {c:?}");
-                        assert!((w.point1 - c.point).length() < 1e-4, "{w:?} against {c:?}");
+                        // Where a face is deepest its points tie: parry's EPA picks one, the
+                        // cylinder-box contact the one nearest the box. Both lie on the plane.
+                        assert!((w.point1 - c.point).dot(c.normal).abs() < 1e-4, "{w:?} against {c:?}");
                     }
                     (w, g) => panic!("at {x},{y},{z}: parry {w:?}, ours {g:?}"),
                 }

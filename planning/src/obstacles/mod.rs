@@ -29,6 +29,7 @@
 
 mod balls;
 mod contact;
+mod cylinder_box;
 mod gjk;
 mod scene;
 

@@ -796,6 +796,11 @@ fn load8(v: &[Real; BallBatch::CAPACITY], o: usize) -> f32x8 {
     f32x8::new(lane)
 }
 
+/// A box or a cylinder `s` at `pose` as [`gjk::touch`] takes it; `None` for other shapes.
+pub(super) fn convex_at(s: &dyn Shape, pose: &Pose) -> Option<Convex> {
+    Quick::at(s, pose).convex()
+}
+
 impl Quick {
     fn of(o: &Obstacle) -> Self {
         Self::at(&*o.shape, &o.pose)
