@@ -210,8 +210,9 @@ fn support_map_contact(
 /// (`b` at `pos12` in `a`'s frame), where it is settled without parry: `Some(None)` when the
 /// exact search ([`gjk::touch`](super::gjk::touch), in `f64`) finds them apart and no margin
 /// is asked for; for overlapping shapes their least overlap ([`overlap_of_cylinder_and_box`]).
-/// `None` (parry's GJK and EPA decide) for other pairs, shapes apart within a margin, and
-/// where the search is unsure.
+/// `None` (parry's GJK and EPA decide) for other pairs, shapes apart within a margin, where
+/// the search is unsure, and where the least overlap finds a separating direction the
+/// search did not.
 fn cylinder_box_contact(
     a: &dyn Shape,
     b: &dyn Shape,

@@ -187,7 +187,7 @@ impl Circle {
     /// narrows where a step would leave it or the overlap is not convex. Where the slope does
     /// not change sign across the bracket, the sample itself.
     fn least_near(&self, c0: f64, s0: f64) -> (f64, f64) {
-        // `(c0, s0)` turned by `a` (by its cosine and sine).
+        // `(c0, s0)` turned by the angle whose cosine and sine are `ca` and `sa`.
         let turned = |ca: f64, sa: f64| (c0 * ca - s0 * sa, s0 * ca + c0 * sa);
         let slope = |(c, s): (f64, f64)| self.slopes(c, s).0;
         if !(slope(turned(STEP_COS, -STEP_SIN)) < 0.0 && slope(turned(STEP_COS, STEP_SIN)) > 0.0) {
