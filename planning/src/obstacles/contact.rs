@@ -170,7 +170,7 @@ fn cuboids_overlap(pos12: &Pose, ha: Vector, hb: Vector) -> Option<(Vector, Vect
         if n[k].abs() > 1e-6 {
             ha[k].copysign(n[k])
         } else {
-            t[k].clamp(-ha[k], ha[k])
+            t[k].max(-ha[k]).min(ha[k])
         }
     });
     let f = |v: V3| Vector::new(v[0] as Real, v[1] as Real, v[2] as Real);
@@ -502,6 +502,29 @@ mod tests {
             (c.distance - (0.03 - 0.05)).abs() < 1e-6 && (c.normal - Vector::X).length() < 1e-5,
             "{c:?}"
         );
+    }
+
+    /// Shapes with negative or non-finite sizes (parry's constructors refuse some; its fields
+    /// are public) get an answer, never a panic.
+    #[test]
+    fn malformed_shapes_do_not_panic() {
+        let sizes = [-0.1, f32::NAN, 0.0, 0.1];
+        for a in sizes {
+            for b in sizes {
+                let cylinder = Cylinder {
+                    half_height: a,
+                    radius: b,
+                };
+                let cuboid = Cuboid {
+                    half_extents: Vector::new(b, a, 0.1),
+                };
+                for at in [Pose::IDENTITY, Pose::translation(0.05, 0.02, 0.0)] {
+                    let _ = shape_contact(&cylinder, &Pose::IDENTITY, &cuboid, &at, 0.0);
+                    let _ = shape_contact(&cuboid, &at, &cylinder, &Pose::IDENTITY, 0.01);
+                    let _ = shape_contact(&cuboid, &at, &cuboid, &Pose::IDENTITY, 0.0);
+                }
+            }
+        }
     }
 
     /// Composite obstacles (a triangle mesh, a compound) answer as parry's own composite

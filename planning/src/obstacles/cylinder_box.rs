@@ -286,7 +286,7 @@ pub(super) fn cylinder_support(radius: f64, half_height: f64, n: &V, t: &V, axes
         if lo <= hi {
             0.5 * (lo + hi)
         } else {
-            t.y.clamp(-half_height, half_height)
+            t.y.max(-half_height).min(half_height)
         }
     };
     V::new(x, y, z)
@@ -300,7 +300,7 @@ pub(super) fn box_support(half: [f64; 3], n: &V, toward: &V) -> V {
         if n[k].abs() > 1e-6 {
             half[k].copysign(n[k])
         } else {
-            toward[k].clamp(-half[k], half[k])
+            toward[k].max(-half[k]).min(half[k])
         }
     })
 }
