@@ -12,18 +12,20 @@
 //! overlap is therefore on the caps' normals, on the great circle perpendicular to the
 //! cylinder's axis (where it is the greatest of eight linear functions plus the radius:
 //! closed form), or on one of the three great circles perpendicular to a box axis (a smooth
-//! function between known kinks, sampled, then refined by Newton steps). Every direction
-//! tried is a real one, so the answer is never below the depth; parry's EPA, which builds a
-//! polytope inside the difference, errs the other way and takes several times longer.
+//! function between known kinks: each piece between samples and kinks whose slope turns
+//! from falling to rising is refined by Newton steps). Every direction tried is a real one,
+//! so the answer is never below the depth; parry's EPA, which builds a polytope inside the
+//! difference, errs the other way and takes several times longer.
 
 use nalgebra::Vector3;
 
 type V = Vector3<f64>;
 
-/// Samples of each great circle perpendicular to a box axis before refinement.
+/// Samples of each great circle perpendicular to a box axis: the steps between them, cut at
+/// the circle's kinks, are the smooth pieces searched for minima.
 const CIRCLE_SAMPLES: usize = 64;
 
-/// The most Newton (or bisection) steps that refine a sampled local minimum.
+/// The most Newton (or bisection) steps that refine a minimum within a piece.
 const REFINE_STEPS: usize = 40;
 
 /// The least overlap of a cylinder (at the origin, axis `y`, as parry's `Cylinder`: radius
@@ -77,25 +79,39 @@ pub(super) fn cylinder_box_depth(
             consider(V::new(-c.x / len, 0.0, -c.z / len), &mut best);
         }
     }
-    // The great circles perpendicular to each box axis: sampled, and every sampled local
-    // minimum refined.
+    // The great circles perpendicular to each box axis, step by step between samples: every
+    // smooth piece whose slope falls at its start and rises at its end holds a minimum.
     for k in 0..3 {
         let circle = Circle::new(radius, half_height, t, axes, half, k);
-        let mut samples = [0.0; CIRCLE_SAMPLES];
-        for (sample, &(c, s)) in samples.iter_mut().zip(&SAMPLES) {
-            *sample = circle.overlap(c, s);
+        // The slope at every sample, and the steps that hold a kink (the box's faces lie on
+        // every sixteenth sample; `n_y = 0` at two opposite angles): those steps, and the
+        // steps whose slope falls at the start and rises at the end, are searched piece by
+        // piece.
+        let mut slopes = [0.0; CIRCLE_SAMPLES];
+        for (slope, &(c, s)) in slopes.iter_mut().zip(&SAMPLES) {
+            *slope = circle.slopes(c, s).0;
+        }
+        let mut kinked = [false; CIRCLE_SAMPLES];
+        let quarter = CIRCLE_SAMPLES / 4;
+        for i in (0..CIRCLE_SAMPLES).step_by(quarter) {
+            kinked[i] = true;
+            kinked[(i + CIRCLE_SAMPLES - 1) % CIRCLE_SAMPLES] = true;
+        }
+        if circle.alpha.abs() + circle.beta.abs() > 1e-12 {
+            let flat = (-circle.alpha).atan2(circle.beta).rem_euclid(std::f64::consts::PI);
+            for half_turn in [0.0, std::f64::consts::PI] {
+                let step = ((flat + half_turn) / STEP) as usize;
+                for i in [step + CIRCLE_SAMPLES - 1, step, step + 1] {
+                    kinked[i % CIRCLE_SAMPLES] = true;
+                }
+            }
         }
         for i in 0..CIRCLE_SAMPLES {
-            let (before, after) = (
-                samples[(i + CIRCLE_SAMPLES - 1) % CIRCLE_SAMPLES],
-                samples[(i + 1) % CIRCLE_SAMPLES],
-            );
-            if samples[i] > before || samples[i] > after {
-                continue;
+            let next = slopes[(i + 1) % CIRCLE_SAMPLES];
+            if kinked[i] || (slopes[i] < 0.0 && next > 0.0) {
+                let (c, s) = SAMPLES[i];
+                circle.refine(c, s, |c, s| consider(circle.u * c + circle.w * s, &mut best));
             }
-            circle.refine(SAMPLES[i].0, SAMPLES[i].1, |c, s| {
-                consider(circle.u * c + circle.w * s, &mut best)
-            });
         }
     }
     let (depth, n) = best;
@@ -157,13 +173,6 @@ impl Circle {
         }
     }
 
-    fn overlap(&self, c: f64, s: f64) -> f64 {
-        let g = self.alpha * c + self.beta * s;
-        self.hu * c.abs() + self.hw * s.abs() + self.half_height * g.abs() + self.radius * (1.0 - g * g).max(0.0).sqrt()
-            - self.tu * c
-            - self.tw * s
-    }
-
     /// The overlap's first and second derivatives in `θ` at `(cos θ, sin θ)`, on the smooth
     /// piece there.
     fn slopes(&self, c: f64, s: f64) -> (f64, f64) {
@@ -183,21 +192,20 @@ impl Circle {
         (d1, d2)
     }
 
-    /// The directions `(cos θ, sin θ)` where the overlap has a local minimum within a sample
-    /// spacing of the sample `(c0, s0)`, each passed to `found`. The bracket between the two
-    /// neighbouring samples is cut at its kinks (the box's faces, a quarter turn apart, and
-    /// `n_y = 0`: the caller tries those directions itself) into smooth pieces; a piece whose
-    /// slope falls at its start and rises at its end holds a minimum, found by Newton steps
-    /// on the slope kept inside the piece by bisection.
+    /// The directions `(cos θ, sin θ)` where the overlap has a local minimum between the
+    /// sample `(c0, s0)` and the next, each passed to `found`. The step is cut at its kinks
+    /// (the box's faces, a quarter turn apart, and `n_y = 0`: the caller tries those
+    /// directions itself) into smooth pieces; a piece whose slope falls at its start and
+    /// rises at its end holds a minimum, found by Newton steps on the slope kept inside the
+    /// piece by bisection.
     fn refine(&self, c0: f64, s0: f64, mut found: impl FnMut(f64, f64)) {
         // `(c0, s0)` turned by the angle whose cosine and sine are `ca` and `sa`.
         let turned = |ca: f64, sa: f64| (c0 * ca - s0 * sa, s0 * ca + c0 * sa);
         let slope = |c: f64, s: f64| self.slopes(c, s).0;
-        // The pieces' ends, as turns from the sample with their directions: the neighbouring
-        // samples, and the kinks between them.
+        // The pieces' ends, as turns from the sample with their directions: the sample, the
+        // kinks after it and the next sample.
         let mut ends = [(0.0, 0.0, 0.0); 8];
-        let (c, s) = turned(STEP_COS, -STEP_SIN);
-        ends[0] = (-STEP, c, s);
+        ends[0] = (0.0, c0, s0);
         let mut count = 1;
         let rho = (self.alpha * self.alpha + self.beta * self.beta).sqrt();
         let (fc, fs) = if rho > 1e-12 {
@@ -207,7 +215,7 @@ impl Circle {
         };
         for (kc, ks) in [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (fc, fs), (-fc, -fs)] {
             let (dot, cross) = (kc * c0 + ks * s0, c0 * ks - s0 * kc);
-            if dot > STEP_COS {
+            if dot > STEP_COS && cross > 0.0 {
                 ends[count] = (cross.atan2(dot), kc, ks);
                 count += 1;
             }
