@@ -28,7 +28,7 @@ use super::scene::convex_at;
 /// Balls take parry's closed forms; two overlapping boxes the separating-axis test (their
 /// least overlap over fifteen axes: the exact depth, where parry's EPA can fall a fifth
 /// short on deep overlaps); a cylinder and a box the exact search in `f64`, then where they
-/// overlap their least overlap (exact where the EPA falls short, in half its time); other
+/// overlap their least overlap (never short of the depth, where the EPA can be); other
 /// convex pairs GJK and the per-thread EPA, which parry's own `query::contact` would build
 /// anew for each overlap; a composite obstacle (a
 /// triangle mesh, a polyline, a compound) the deepest contact of its parts near the shape,
@@ -166,15 +166,9 @@ fn cuboids_overlap(pos12: &Pose, ha: Vector, hb: Vector) -> Option<(Vector, Vect
     let n = if dot(t, l) < 0.0 { l.map(|x| -x) } else { l };
     // `a`'s supporting vertex, edge or face along `n`; on an edge or face, the point of it
     // nearest `b`'s centre.
-    let p: V3 = std::array::from_fn(|k| {
-        if n[k].abs() > 1e-6 {
-            ha[k].copysign(n[k])
-        } else {
-            t[k].max(-ha[k]).min(ha[k])
-        }
-    });
+    let p = box_support(ha, &V::from(n), &V::from(t));
     let f = |v: V3| Vector::new(v[0] as Real, v[1] as Real, v[2] as Real);
-    Some((f(p), f(n), -depth as Real))
+    Some((f(p.into()), f(n), -depth as Real))
 }
 
 type V = Vector3<f64>;
@@ -232,9 +226,9 @@ fn cylinder_box_contact(
 }
 
 /// The contact of an overlapping cylinder and box, either way round, in [`support_map_contact`]'s
-/// terms: the least overlap ([`cylinder_box_depth`], exact up to a refinement's micrometres,
-/// where parry's EPA can fall short), the normal along which it is least and `a`'s farthest
-/// point along that normal. `None` for other pairs, and where a direction separates the two.
+/// terms: the least overlap ([`cylinder_box_depth`], never below the depth, where parry's
+/// EPA can fall short, and rarely a fraction of a millimetre above it), the normal along
+/// which it is least and `a`'s farthest point along that normal. `None` for other pairs, and where a direction separates the two.
 fn overlap_of_cylinder_and_box(a: &dyn Shape, b: &dyn Shape, pos12: &Pose) -> Option<(Vector, Vector, Real)> {
     let d3 = |v: Vector| V::new(f64::from(v.x), f64::from(v.y), f64::from(v.z));
     let f3 = |v: V| Vector::new(v.x as Real, v.y as Real, v.z as Real);
