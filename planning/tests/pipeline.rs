@@ -295,10 +295,8 @@ fn bad_settings_are_typed_errors() {
     assert!(matches!(planner.with_limits(two), Err(PlanError::BadInput(_))));
 }
 
-/// The tests' MotionBenchMaker excerpts with the default settings: the Panda's table_pick
-/// problem, and the Fetch's, whose goal our model refuses (torso against shoulder, a pair the
-/// problem set does not allow), so the Fetch plans from that start to a valid configuration drawn
-/// at random instead; the Fetch with the benchmark's weight schedule. Fingers as the problem
+/// The tests' MotionBenchMaker excerpts with the default settings: the Panda's and the Fetch's
+/// table_pick problems, the Fetch with the benchmark's weight schedule. Fingers as the problem
 /// sets hold them, clamped to the models.
 #[test]
 fn motionbenchmaker_problems_of_both_robots() {
@@ -327,29 +325,7 @@ fn motionbenchmaker_problems_of_both_robots() {
         }
         let limits = planner.limits().clone();
         let mut rng = Pcg64Mcg::seed_from_u64(u64::from(p.id));
-        let goals = match robot {
-            "panda" => p.goals.clone(),
-            _ => {
-                let e = planner
-                    .plan(&p.start, Goal::AnyOf(p.goals.clone()), &budget(), &mut rng)
-                    .unwrap_err();
-                let named = e.to_string();
-                assert!(
-                    matches!(e, PlanError::InvalidGoals { .. }) && named.contains("torso_lift_link"),
-                    "{named}"
-                );
-                // The first valid configuration drawn with this seed.
-                let space = JointSpace::from_chain(&chain).unwrap();
-                let mut v = validity();
-                let mut q = vec![0.0; chain.dof()];
-                loop {
-                    space.sample(&mut rng, &mut q);
-                    if v.is_valid(&q) {
-                        break vec![q];
-                    }
-                }
-            }
-        };
+        let goals = p.goals.clone();
         let motion = planner
             .plan(&p.start, Goal::AnyOf(goals.clone()), &budget(), &mut rng)
             .unwrap_or_else(|e| panic!("{robot} {}: {e}", p.id));
