@@ -11,7 +11,6 @@ use hearth_planning::pipeline::{FETCH_WEIGHT_SCHEDULE, MotionPlanner, MotionSett
 use hearth_planning::problem::ProblemSet;
 use hearth_planning::space::{JointSpace, Space};
 use hearth_planning::trajectory::Limits;
-use hearth_planning::validity::StateValidator;
 use hearth_planning::{Budget, Goal, LazyPrm, PlanError, RobotValidity, Rrt};
 use parry3d::math::{Pose, Vector};
 use proptest::prelude::*;
