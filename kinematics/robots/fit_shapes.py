@@ -98,10 +98,10 @@ def origin_of(element):
     return xyz, rpy
 
 
-def primitives(urdf):
-    """Per link: its collision primitives as (kind, xyz, rpy, attributes)."""
+def primitives(text):
+    """Per link of the URDF `text`: its collision primitives as (kind, xyz, rpy, attributes)."""
     out = {}
-    for link in ET.parse(urdf).getroot().findall("link"):
+    for link in ET.fromstring(text).findall("link"):
         prims = []
         for col in link.findall("collision"):
             xyz, rpy = origin_of(col)
@@ -182,8 +182,8 @@ def main():
     ap.add_argument("--keep", default="", help="comma-separated links to leave as they are")
     ap.add_argument("--write", action="store_true", help="rewrite the URDF with the tightened shapes")
     a = ap.parse_args()
-    ours, theirs = primitives(a.urdf), meshes(a.mesh_urdf, a.mesh_dir)
     text = open(a.urdf).read()
+    ours, theirs = primitives(text), meshes(a.mesh_urdf, a.mesh_dir)
     least = a.margin - GRID_REACH * a.spacing
     worst = np.inf
     keep = set(filter(None, a.keep.split(",")))
@@ -196,7 +196,7 @@ def main():
         points = np.concatenate(points)
         deep = np.stack([depth(points, p) for p in prims], axis=1)
         if deep.max(axis=1).min() <= 0:
-            raise SystemExit(f"{link}: its primitives do not cover its mesh; not touched")
+            raise SystemExit(f"{link}: its primitives do not cover its mesh; nothing written")
         if a.write:
             owner = deep.argmax(axis=1)
             start = text.index(f'<link name="{link}"')
@@ -219,15 +219,16 @@ def main():
                     body,
                 )
             text = text[:start] + body + text[end:]
-            open(a.urdf, "w").write(text)
-            prims = primitives(a.urdf)[link]
+            prims = primitives(text)[link]
             deep = np.stack([depth(points, p) for p in prims], axis=1)
         d = deep.max(axis=1)
         worst = min(worst, d.min())
         print(f"{link:24} {len(prims):3} shapes  least depth {d.min() * 1e3:5.2f} mm  "
               f"median {np.median(d) * 1e3:5.2f} mm")
-    if a.write and worst < least:
-        raise SystemExit(f"a sample lies {worst * 1e3:.2f} mm deep, less than {least * 1e3:.2f} mm")
+    if a.write:
+        if worst < least:
+            raise SystemExit(f"a sample lies {worst * 1e3:.2f} mm deep, less than {least * 1e3:.2f} mm; nothing written")
+        open(a.urdf, "w").write(text)
 
 
 if __name__ == "__main__":
