@@ -225,10 +225,11 @@ fn cylinder_box_contact(
     }
 }
 
-/// The contact of an overlapping cylinder and box, either way round, in [`support_map_contact`]'s
-/// terms: the least overlap ([`cylinder_box_depth`], never below the depth, where parry's
-/// EPA can fall short, and rarely a fraction of a millimetre above it), the normal along
-/// which it is least and `a`'s farthest point along that normal. `None` for other pairs, and where a direction separates the two.
+/// The contact of an overlapping cylinder and box, either way round, in
+/// [`support_map_contact`]'s terms: the least overlap ([`cylinder_box_depth`], never below the
+/// depth, where parry's EPA can fall short, and rarely a fraction of a millimetre above it),
+/// the normal along which it is least and `a`'s farthest point along that normal. `None` for
+/// other pairs, and where a direction separates the two.
 fn overlap_of_cylinder_and_box(a: &dyn Shape, b: &dyn Shape, pos12: &Pose) -> Option<(Vector, Vector, Real)> {
     let d3 = |v: Vector| V::new(f64::from(v.x), f64::from(v.y), f64::from(v.z));
     let f3 = |v: V| Vector::new(v.x as Real, v.y as Real, v.z as Real);
