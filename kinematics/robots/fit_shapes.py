@@ -20,6 +20,13 @@ them (`--mesh-urdf`) gives each link's mesh file and origin, relative to `--mesh
         --keep r_gripper_finger_link,l_gripper_finger_link --write
 
 (the command that tightened the Fetch's shapes; the finger pads are kept, see docs/robots.md).
+The head links have no mesh in that URDF (it models the head as a ball); they were tightened
+afterwards around fetch_description's head meshes, which sit at the links' origins:
+
+    python3 kinematics/robots/fit_shapes.py kinematics/robots/fetch.urdf \
+        --mesh-urdf PATH/fetch.urdf --mesh-dir PATH/meshes --margin 0.0006 \
+        --only head_pan_link,head_tilt_link --mesh head_pan_link=head_pan_link_collision.STL \
+        --mesh head_tilt_link=head_tilt_link_collision.STL --write
 
 Without `--write` it only reports the coverage of the primitives as they are. Needs numpy.
 """
@@ -180,15 +187,25 @@ def main():
     ap.add_argument("--margin", type=float, default=0.0006, help="least depth of a sample (m)")
     ap.add_argument("--spacing", type=float, default=0.001, help="sample grid spacing (m)")
     ap.add_argument("--keep", default="", help="comma-separated links to leave as they are")
+    ap.add_argument("--only", default="", help="comma-separated links to tighten, leaving the rest as they are")
+    ap.add_argument("--mesh", action="append", default=[], metavar="LINK=FILE",
+                    help="a link's collision mesh (relative to --mesh-dir, at the link's origin) where "
+                         "the mesh URDF names none; may be repeated")
     ap.add_argument("--write", action="store_true", help="rewrite the URDF with the tightened shapes")
     a = ap.parse_args()
     text = open(a.urdf).read()
     ours, theirs = primitives(text), meshes(a.mesh_urdf, a.mesh_dir)
+    for item in a.mesh:
+        link, _, name = item.partition("=")
+        if link not in ours or not name:
+            raise SystemExit(f"--mesh {item}: expected LINK=FILE with a link of {a.urdf}")
+        theirs[link] = [(os.path.join(a.mesh_dir, name), np.zeros(3), np.zeros(3))]
+    only = set(filter(None, a.only.split(",")))
     least = a.margin - GRID_REACH * a.spacing
     worst = np.inf
     keep = set(filter(None, a.keep.split(",")))
     for link, prims in ours.items():
-        if not prims or link not in theirs or link in keep:
+        if not prims or link not in theirs or link in keep or (only and link not in only):
             continue
         points = []
         for path, xyz, rpy in theirs[link]:
