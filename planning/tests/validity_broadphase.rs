@@ -165,10 +165,11 @@ fn cluttered(seed: u64, n: usize) -> Vec<Obstacle> {
 fn compare(v: &mut RobotValidity, r: &mut Reference, qs: &[Vec<f64>]) -> (usize, usize) {
     let all = qs.len();
     let (unsure, qs): (Vec<Vec<f64>>, Vec<Vec<f64>>) = qs.iter().cloned().partition(|q| r.self_unsure(q));
-    // Parry contradicts itself on 0–4 % of random states, 13 % of the Fetch's pocket runs
-    // (links folded close together).
+    // Parry contradicts itself on 0–4 % of random states, 17 % of the Fetch's pocket runs
+    // (links folded close together; 13 % before its head's shapes were tightened, which brings
+    // the head's boxes closer to the upper arm).
     assert!(
-        unsure.len() * 100 <= all * 15,
+        unsure.len() * 100 <= all * 20,
         "{} of {all} configurations left out",
         unsure.len()
     );
