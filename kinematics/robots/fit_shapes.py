@@ -204,6 +204,9 @@ def main():
     least = a.margin - GRID_REACH * a.spacing
     worst = np.inf
     keep = set(filter(None, a.keep.split(",")))
+    unknown = sorted((only | keep) - set(ours))
+    if unknown:
+        raise SystemExit(f"no such link in {a.urdf}: {', '.join(unknown)}")
     for link, prims in ours.items():
         if not prims or link not in theirs or link in keep or (only and link not in only):
             continue
