@@ -28,6 +28,13 @@ afterwards around fetch_description's head meshes, which sit at the links' origi
         --only head_pan_link,head_tilt_link --mesh head_pan_link=head_pan_link_collision.STL \
         --mesh head_tilt_link=head_tilt_link_collision.STL --write
 
+The Panda's links 6 and 7 and its hand, against the collision meshes VAMP ships (detailed
+for those links; its links 1–5 are coarse hulls that this tool cannot measure against):
+
+    python3 kinematics/robots/fit_shapes.py kinematics/robots/panda.urdf \
+        --mesh-urdf PATH/panda.urdf --mesh-dir PATH/meshes --margin 0.0006 \
+        --only panda_link6,panda_link7,panda_hand --write
+
 Without `--write` it only reports the coverage of the primitives as they are. Needs numpy.
 """
 
