@@ -654,11 +654,13 @@ fn mbm_table_pick_motions_checked_along_match_brute_force() {
             .iter()
             .map(|g| (problem.start.clone(), g.clone()))
             .collect();
-        motions.extend(short_motions(&arm, &mut r, 31, 40, 1.5));
+        motions.extend(short_motions(&arm, &mut r, 31, 100, 1.5));
         for (t, c) in total.iter_mut().zip(compare_along(&mut v, &motions, 0.002)) {
             *t += c;
         }
     }
+    // 96 clear and 5 blocked motions (with 40 random motions a problem, the tightened Panda hand
+    // left only 2 blocked).
     assert!(total[0] > 10 && total[1] > 2, "{total:?}");
     assert!(total[3] * 2 < total[2], "{total:?}");
 }
