@@ -207,13 +207,12 @@ def main():
         if link not in ours or not name:
             raise SystemExit(f"--mesh {item}: expected LINK=FILE with a link of {a.urdf}")
         theirs[link] = [(os.path.join(a.mesh_dir, name), np.zeros(3), np.zeros(3))]
-    only = set(filter(None, a.only.split(",")))
-    least = a.margin - GRID_REACH * a.spacing
-    worst = np.inf
-    keep = set(filter(None, a.keep.split(",")))
+    only, keep = (set(filter(None, names.split(","))) for names in (a.only, a.keep))
     unknown = sorted((only | keep) - set(ours))
     if unknown:
         raise SystemExit(f"no such link in {a.urdf}: {', '.join(unknown)}")
+    least = a.margin - GRID_REACH * a.spacing
+    worst = np.inf
     for link, prims in ours.items():
         if not prims or link not in theirs or link in keep or (only and link not in only):
             continue

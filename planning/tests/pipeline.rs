@@ -324,9 +324,8 @@ fn motionbenchmaker_problems_of_both_robots() {
         }
         let limits = planner.limits().clone();
         let mut rng = Pcg64Mcg::seed_from_u64(u64::from(p.id));
-        let goals = p.goals.clone();
         let motion = planner
-            .plan(&p.start, Goal::AnyOf(goals.clone()), &budget(), &mut rng)
+            .plan(&p.start, Goal::AnyOf(p.goals.clone()), &budget(), &mut rng)
             .unwrap_or_else(|e| panic!("{robot} {}: {e}", p.id));
         assert_motion(
             &format!("{robot} {}", p.id),
@@ -334,7 +333,7 @@ fn motionbenchmaker_problems_of_both_robots() {
             &mut validity(),
             &limits,
             &p.start,
-            &goals,
+            &p.goals,
         );
     }
 }
