@@ -411,6 +411,88 @@ fn bench_plan_refuses_unreadable_and_empty_inputs() {
     std::fs::remove_dir_all(&empty).unwrap();
 }
 
+/// `--urdf ROBOT=PATH` plans a problem set's robot with another URDF's model: the built-in
+/// Panda's own file gives the built-in model's plan, a model without collision geometry plans
+/// through the table, and bad arguments are refused before any plan.
+#[test]
+fn bench_plan_takes_another_urdf() {
+    let dir = temp_dir("plan_urdf");
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/planning/tests/data/panda_table_pick.json");
+    let builtin = concat!(env!("CARGO_MANIFEST_DIR"), "/kinematics/robots/panda.urdf");
+    let text = std::fs::read_to_string(builtin).unwrap();
+    let bare = dir.join("panda_bare.urdf");
+    let mut stripped = String::new();
+    let mut rest = text.as_str();
+    while let Some(at) = rest.find("<collision") {
+        stripped.push_str(&rest[..at]);
+        let end = rest[at..].find("</collision>").unwrap() + at + "</collision>".len();
+        rest = &rest[end..];
+    }
+    stripped.push_str(rest);
+    assert!(!stripped.contains("<collision") && stripped.len() < text.len());
+    std::fs::write(&bare, &stripped).unwrap();
+    let common = [
+        "bench",
+        "plan",
+        "--problems",
+        data,
+        "--only",
+        "table_pick:1",
+        "--warm-up",
+        "0",
+        "--shortcut",
+        "none",
+        "--iterations",
+        "100000",
+        "--time-limit",
+        "inf",
+        "--seed",
+        "4",
+    ];
+    let run = |extra: &[&str], name: &str| {
+        let path = dir.join(name);
+        let args = [&common[..], extra, &["--json", path.to_str().unwrap()][..]].concat();
+        let o = hearth(&args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        (stderr(&o), v["results"][0].clone())
+    };
+    let (_, own) = run(&[], "builtin.json");
+    let same_file = format!("panda={builtin}");
+    let (err, file) = run(&["--urdf", &same_file], "file.json");
+    assert!(err.contains("model from") && err.contains("panda.urdf"), "{err}");
+    assert_eq!(own["success"], Value::Bool(true), "{own}");
+    for key in ["success", "iterations", "plan_checks", "path_length"] {
+        assert_eq!(own[key], file[key], "{key}: {own} against {file}");
+    }
+    // Without collision geometry nothing blocks the straight line from start to goal.
+    let bare_arg = format!("panda={}", bare.display());
+    let (_, free) = run(&["--urdf", &bare_arg], "bare.json");
+    assert_eq!(free["success"], Value::Bool(true), "{free}");
+    assert!(
+        free["iterations"].as_u64().unwrap() < own["iterations"].as_u64().unwrap().max(1),
+        "{free}"
+    );
+    // Refused: no `=`, a robot no problem file plans, a robot named twice, a missing file, a
+    // model without the problems' joints.
+    let missing = dir.join("missing.urdf");
+    let missing_arg = format!("panda={}", missing.display());
+    let tiny = dir.join("tiny.urdf");
+    std::fs::write(&tiny, r#"<robot name="t"><link name="a"/></robot>"#).unwrap();
+    let tiny_arg = format!("panda={}", tiny.display());
+    for (extra, says) in [
+        (vec!["--urdf", "panda"], "expected ROBOT=PATH"),
+        (vec!["--urdf", "fetch=x.urdf"], "plans robot `fetch`"),
+        (vec!["--urdf", &same_file, "--urdf", &same_file], "twice"),
+        (vec!["--urdf", &missing_arg], "missing.urdf"),
+        (vec!["--urdf", &tiny_arg], "panda_joint1"),
+    ] {
+        let err = fails(&[&common[..], &extra[..]].concat());
+        assert!(err.contains(says), "{extra:?}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn bench_plan_writes_results_json() {
     let dir = std::env::temp_dir().join(format!("hearth_cli_plan_{}", std::process::id()));

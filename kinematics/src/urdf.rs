@@ -355,8 +355,14 @@ pub(crate) fn build(
             target: m.joint.clone(),
             reason,
         };
+        // A fixed joint has no position to follow: its `<mimic>` is left out, as ROS's
+        // parsers leave it (VAMP's sphere model of the Panda fixes its fingers so and
+        // keeps the tag). A target that does not exist is still an error: likely a typo.
         if joints[ji].kind == JointKind::Fixed {
-            return Err(bad("a fixed joint cannot mimic"));
+            if !joint_by_name.contains_key(&m.joint) {
+                return Err(bad("no joint has that name"));
+            }
+            continue;
         }
         let mut multiplier = m.multiplier.unwrap_or(1.0);
         let mut offset = m.offset.unwrap_or(0.0);

@@ -383,6 +383,29 @@ fn mimic_of_a_missing_joint() {
     assert_eq!(m.variable_names(), ["j1", "j3"]);
 }
 
+/// A fixed joint's `<mimic>` is left out (it has no position to follow), unless it names a
+/// joint that does not exist.
+#[test]
+fn mimic_on_a_fixed_joint_is_ignored() {
+    let fixed = |mimic: &str| {
+        format!(
+            r#"<robot name="r">
+  <link name="l0"/><link name="l1"/><link name="l2"/>
+  <joint name="j1" type="fixed"><parent link="l0"/><child link="l1"/></joint>
+  <joint name="j2" type="fixed"><parent link="l0"/><child link="l2"/>{mimic}</joint>
+</robot>"#
+        )
+    };
+    let m = load(&fixed(r#"<mimic joint="j1"/>"#)).unwrap();
+    assert!(m.variable_names().is_empty());
+    let (e, msg) = fail(&fixed(r#"<mimic joint="nobody"/>"#));
+    assert!(
+        matches!(e, KinematicsError::BadMimic { ref joint, ref target, .. } if joint == "j2" && target == "nobody"),
+        "{e:?}"
+    );
+    names(&msg, &[SRC, "`j2`", "`nobody`"]);
+}
+
 #[test]
 fn mimic_loop() {
     let (e, msg) = fail(&mimic_robot(r#"<mimic joint="j3"/>"#, r#"<mimic joint="j2"/>"#));

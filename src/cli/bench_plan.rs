@@ -99,6 +99,14 @@ pub struct BenchPlanArgs {
     /// Planner.
     #[arg(long, value_enum, default_value_t = PlannerKind::Birrt)]
     planner: PlannerKind,
+    /// Plans a robot with the model of a URDF file instead of the built-in one, as
+    /// `ROBOT=PATH` (repeatable; ROBOT is the name the problem files give). The file must
+    /// have the joints the problems plan; its collision geometry, limits and fixed joints are
+    /// used as they are, and the problem set's finger position is applied only where the file
+    /// makes that joint movable. For side-by-side runs on another planner's robot model, e.g.
+    /// VAMP's sphere model of the Panda (`docs/benchmarks.md`).
+    #[arg(long = "urdf", value_name = "ROBOT=PATH")]
+    urdf: Vec<String>,
     /// Time limit per plan, in seconds.
     #[arg(long, default_value_t = 1.0)]
     time_limit: f64,
@@ -243,6 +251,27 @@ pub struct BenchPlanArgs {
     /// Write results as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+}
+
+/// `--urdf` arguments: the model file for each robot named. A robot that no problem file plans,
+/// or named twice, is an error.
+fn parse_urdfs<'a>(
+    urdf: &'a [String],
+    sets: &[(ProblemSet, Option<PathBuf>)],
+) -> anyhow::Result<BTreeMap<&'a str, PathBuf>> {
+    let mut out = BTreeMap::new();
+    for arg in urdf {
+        let Some((robot, path)) = arg.split_once('=').filter(|(r, p)| !r.is_empty() && !p.is_empty()) else {
+            bail!("--urdf `{arg}`: expected ROBOT=PATH, e.g. panda=panda_spherized.urdf");
+        };
+        if !sets.iter().any(|(s, _)| s.robot == robot) {
+            bail!("--urdf {arg}: no problem file given plans robot `{robot}`");
+        }
+        if out.insert(robot, PathBuf::from(path)).is_some() {
+            bail!("--urdf names robot `{robot}` twice");
+        }
+    }
+    Ok(out)
 }
 
 /// `--only` selectors: (family, optional problem id).
@@ -430,11 +459,19 @@ struct RobotSetup {
 /// `weighted`.
 fn setup(
     robot: &str,
+    urdf: Option<&Path>,
     joint_names: &[String],
     joints_file: Option<&Path>,
     weighted: bool,
 ) -> anyhow::Result<RobotSetup> {
-    let model = RobotModel::builtin(robot)?;
+    let mut note = String::new();
+    let model = match urdf {
+        None => RobotModel::builtin(robot)?,
+        Some(path) => {
+            note.push_str(&format!("model from {}; ", path.display()));
+            RobotModel::from_urdf_file(path).with_context(|| format!("--urdf {robot}={}", path.display()))?
+        }
+    };
     let chain = Chain::new(&model, joint_names)?;
     let mut matrix = SelfCollisionMatrix::compute(
         &model,
@@ -444,7 +481,6 @@ fn setup(
         },
     );
     let mut reference = model.neutral_configuration();
-    let mut note = String::new();
     let info = joints_file
         .map(|path| JointsInfo::load(path).map(|i| (path, i)))
         .transpose()?;
@@ -469,8 +505,9 @@ fn setup(
         };
         if let Some(values) = info.finger_positions() {
             for (name, &v) in fingers.iter().zip(values) {
-                let j = model.joint_index(name)?;
-                if let Some(var) = model.joints()[j].variable {
+                // A model from `--urdf` may fix the fingers or leave them out.
+                let var = model.joint_index(name).ok().and_then(|j| model.joints()[j].variable);
+                if let Some(var) = var {
                     let clamped = v.clamp(model.lower()[var], model.upper()[var]);
                     reference[var] = clamped;
                     note.push_str(&format!("{name} = {clamped} (problem set: {v}); "));
@@ -614,6 +651,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             sets.push((s, joints));
         }
     }
+    let urdfs = parse_urdfs(&a.urdf, &sets)?;
     let selectors = parse_selectors(&a.only)?;
     for (set, _) in &mut sets {
         set.problems.retain(|p| selected(&selectors, &set.family, p.id));
@@ -645,7 +683,8 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     let progress = Progress::new(total);
     for (set, joints) in &sets {
         if !setups.contains_key(&set.robot) {
-            let s = setup(&set.robot, &set.joint_names, joints.as_deref(), weighted(&a))
+            let urdf = urdfs.get(set.robot.as_str()).map(PathBuf::as_path);
+            let s = setup(&set.robot, urdf, &set.joint_names, joints.as_deref(), weighted(&a))
                 .with_context(|| format!("setting up robot `{}`", set.robot))?;
             // The unweighted space's finest spacing is the coarser of the two (weights are at
             // most 1): the re-check runs in it, the planner in the weighted one.
