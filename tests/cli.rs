@@ -473,8 +473,8 @@ fn bench_plan_takes_another_urdf() {
         free["iterations"].as_u64().unwrap() < own["iterations"].as_u64().unwrap().max(1),
         "{free}"
     );
-    // Refused: no `=`, a robot no problem file plans, a robot named twice, a missing file, a
-    // model without the problems' joints.
+    // Refused before any plan, leaving no results file: no `=`, a robot no problem file plans,
+    // a robot named twice, a missing file, a model without the problems' joints.
     let missing = dir.join("missing.urdf");
     let missing_arg = format!("panda={}", missing.display());
     let tiny = dir.join("tiny.urdf");
@@ -487,8 +487,11 @@ fn bench_plan_takes_another_urdf() {
         (vec!["--urdf", &missing_arg], "missing.urdf"),
         (vec!["--urdf", &tiny_arg], "panda_joint1"),
     ] {
-        let err = fails(&[&common[..], &extra[..]].concat());
+        let refused = dir.join("refused.json");
+        let json = ["--json", refused.to_str().unwrap()];
+        let err = fails(&[&common[..], &extra[..], &json[..]].concat());
         assert!(err.contains(says), "{extra:?}: {err}");
+        assert!(!refused.exists(), "{extra:?} left a results file");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

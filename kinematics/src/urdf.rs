@@ -355,9 +355,9 @@ pub(crate) fn build(
             target: m.joint.clone(),
             reason,
         };
-        // A fixed joint has no position to follow: its `<mimic>` is left out, as ROS's
-        // parsers leave it (VAMP's sphere model of the Panda fixes its fingers so and
-        // keeps the tag). A target that does not exist is still an error: likely a typo.
+        // A fixed joint has no position to follow: its `<mimic>` is left out (VAMP's sphere
+        // model of the Panda fixes its fingers and keeps the tag). A target that does not
+        // exist is still an error: likely a typo.
         if joints[ji].kind == JointKind::Fixed {
             if !joint_by_name.contains_key(&m.joint) {
                 return Err(bad("no joint has that name"));

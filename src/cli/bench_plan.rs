@@ -253,12 +253,14 @@ pub struct BenchPlanArgs {
     json: Option<PathBuf>,
 }
 
-/// `--urdf` arguments: the model file for each robot named. A robot that no problem file plans,
-/// or named twice, is an error.
-fn parse_urdfs<'a>(
+/// `--urdf` arguments: each robot named, its file and its model, loaded before anything is
+/// planned or written. A malformed argument, a robot that no problem file plans or that is
+/// named twice, a file that does not load, or a model without the joints a problem set plans
+/// is an error.
+fn load_urdfs<'a>(
     urdf: &'a [String],
     sets: &[(ProblemSet, Option<PathBuf>)],
-) -> anyhow::Result<BTreeMap<&'a str, PathBuf>> {
+) -> anyhow::Result<BTreeMap<&'a str, (&'a Path, RobotModel)>> {
     let mut out = BTreeMap::new();
     for arg in urdf {
         let Some((robot, path)) = arg.split_once('=').filter(|(r, p)| !r.is_empty() && !p.is_empty()) else {
@@ -267,9 +269,16 @@ fn parse_urdfs<'a>(
         if !sets.iter().any(|(s, _)| s.robot == robot) {
             bail!("--urdf {arg}: no problem file given plans robot `{robot}`");
         }
-        if out.insert(robot, PathBuf::from(path)).is_some() {
+        if out.contains_key(robot) {
             bail!("--urdf names robot `{robot}` twice");
         }
+        let path = Path::new(path);
+        let model = RobotModel::from_urdf_file(path).with_context(|| format!("--urdf {arg}"))?;
+        for (set, _) in sets.iter().filter(|(s, _)| s.robot == robot) {
+            Chain::new(&model, &set.joint_names)
+                .with_context(|| format!("--urdf {arg}: the {} problems' joints", set.family))?;
+        }
+        out.insert(robot, (path, model));
     }
     Ok(out)
 }
@@ -459,7 +468,7 @@ struct RobotSetup {
 /// `weighted`.
 fn setup(
     robot: &str,
-    urdf: Option<&Path>,
+    urdf: Option<&(&Path, RobotModel)>,
     joint_names: &[String],
     joints_file: Option<&Path>,
     weighted: bool,
@@ -467,9 +476,9 @@ fn setup(
     let mut note = String::new();
     let model = match urdf {
         None => RobotModel::builtin(robot)?,
-        Some(path) => {
+        Some((path, model)) => {
             note.push_str(&format!("model from {}; ", path.display()));
-            RobotModel::from_urdf_file(path).with_context(|| format!("--urdf {robot}={}", path.display()))?
+            model.clone()
         }
     };
     let chain = Chain::new(&model, joint_names)?;
@@ -651,7 +660,7 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
             sets.push((s, joints));
         }
     }
-    let urdfs = parse_urdfs(&a.urdf, &sets)?;
+    let urdfs = load_urdfs(&a.urdf, &sets)?;
     let selectors = parse_selectors(&a.only)?;
     for (set, _) in &mut sets {
         set.problems.retain(|p| selected(&selectors, &set.family, p.id));
@@ -683,9 +692,14 @@ pub fn run(a: BenchPlanArgs) -> anyhow::Result<()> {
     let progress = Progress::new(total);
     for (set, joints) in &sets {
         if !setups.contains_key(&set.robot) {
-            let urdf = urdfs.get(set.robot.as_str()).map(PathBuf::as_path);
-            let s = setup(&set.robot, urdf, &set.joint_names, joints.as_deref(), weighted(&a))
-                .with_context(|| format!("setting up robot `{}`", set.robot))?;
+            let s = setup(
+                &set.robot,
+                urdfs.get(set.robot.as_str()),
+                &set.joint_names,
+                joints.as_deref(),
+                weighted(&a),
+            )
+            .with_context(|| format!("setting up robot `{}`", set.robot))?;
             // The unweighted space's finest spacing is the coarser of the two (weights are at
             // most 1): the re-check runs in it, the planner in the weighted one.
             let finest = finest_resolution(&s.plain);
