@@ -355,13 +355,13 @@ pub(crate) fn build(
             target: m.joint.clone(),
             reason,
         };
+        // A target that does not exist is an error (likely a typo), on any joint.
+        let mut target = *joint_by_name
+            .get(&m.joint)
+            .ok_or_else(|| bad("no joint has that name"))?;
         // A fixed joint has no position to follow: its `<mimic>` is left out (VAMP's sphere
-        // model of the Panda fixes its fingers and keeps the tag). A target that does not
-        // exist is still an error: likely a typo.
+        // model of the Panda fixes its fingers and keeps the tag).
         if joints[ji].kind == JointKind::Fixed {
-            if !joint_by_name.contains_key(&m.joint) {
-                return Err(bad("no joint has that name"));
-            }
             continue;
         }
         let mut multiplier = m.multiplier.unwrap_or(1.0);
@@ -369,9 +369,6 @@ pub(crate) fn build(
         if !multiplier.is_finite() || !offset.is_finite() {
             return Err(bad("multiplier and offset must be finite"));
         }
-        let mut target = *joint_by_name
-            .get(&m.joint)
-            .ok_or_else(|| bad("no joint has that name"))?;
         if target == ji {
             return Err(bad("a joint cannot mimic itself"));
         }
